@@ -1,0 +1,296 @@
+"""The shared MJX legged-robot environment: PD control, physics stepping, randomisation, observations.
+
+Tasks subclass `LeggedEnv` and implement four hooks (`_task_reset`, `_command`, `_exteroception`,
+`_task_step`). `transition` turns a stepped physics state into the next environment State and is the
+same code whether the physics came from MJX (`step`) or from native MuJoCo (legged.envs.native).
+"""
+
+from __future__ import annotations
+
+import abc
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from brax.envs.base import Env, State
+from mujoco import mjx
+
+from legged.envs.config import EnvConfig
+from legged.envs.contacts import MjxContactReader
+from legged.envs.math import quat_from_yaw, rotate_inv, up_z
+from legged.robots.spec import RobotSpec
+from legged.sensors.heightscan import surface_height
+from legged.worlds.mjcf import SceneOptions, compile_scene
+from legged.worlds.terrain import Terrain
+
+
+def randomized_fields(base: dict, dr: dict, trunk: int, xp=jnp) -> dict:
+    """Model fields after applying randomisation parameters `dr` to the nominal fields `base`.
+
+    Works with jax.numpy (MJX models, per environment under vmap) and numpy (native models).
+    """
+    mass = base["body_mass"] * dr["mass_scale"]
+    mass_trunk = mass[trunk] + dr["base_mass"]
+    inertia = base["body_inertia"] * dr["mass_scale"][:, None]
+    if xp is jnp:
+        mass = mass.at[trunk].set(mass_trunk)
+        inertia = inertia.at[trunk].multiply(mass_trunk / mass[trunk])
+        ipos = base["body_ipos"].at[trunk].add(dr["com"])
+    else:
+        inertia[trunk] *= mass_trunk / mass[trunk]
+        mass[trunk] = mass_trunk
+        ipos = base["body_ipos"].copy()
+        ipos[trunk] += dr["com"]
+    friction = xp.concatenate([xp.full(base["pair_friction"].shape[:1] + (2,), dr["friction"]),
+                               base["pair_friction"][:, 2:]], axis=1)
+    kp = base["actuator_gainprm"][:, 0] * dr["kp"] * dr["strength"]
+    kd = -base["actuator_biasprm"][:, 2] * dr["kd"] * dr["strength"]
+    gain = xp.concatenate([kp[:, None], base["actuator_gainprm"][:, 1:]], axis=1)
+    bias = xp.concatenate([base["actuator_biasprm"][:, :1], -kp[:, None], -kd[:, None],
+                           base["actuator_biasprm"][:, 3:]], axis=1)
+    return dict(body_mass=mass, body_inertia=inertia, body_ipos=ipos, pair_friction=friction,
+                actuator_gainprm=gain, actuator_biasprm=bias)
+
+
+class LeggedEnv(Env, abc.ABC):
+    """A Brax-compatible MJX environment for one legged robot on a terrain."""
+
+    def __init__(self, robot: RobotSpec, terrain: Terrain, scene: SceneOptions, config: EnvConfig):
+        self.robot, self.terrain, self.config = robot, terrain, config
+        self.n_substeps = config.n_substeps
+        self.mj_model = compile_scene(terrain, robot, scene)
+        self.mj_model.opt.timestep = config.sim_dt
+        self.mjx_model = mjx.put_model(self.mj_model)
+        m = self.mj_model
+        joints = [m.joint(n) for n in robot.joint_names]
+        self._qadr = np.array([m.jnt_qposadr[j.id] for j in joints])
+        self._vadr = np.array([m.jnt_dofadr[j.id] for j in joints])
+        if list(m.actuator_trnid[:, 0]) != [j.id for j in joints]:
+            raise ValueError(f"{robot.mjcf_path}: actuators must drive {robot.joint_names} in that order")
+        self._trunk = m.body(robot.root_body).id
+        self._default_pose = jnp.asarray(robot.default_pose, jnp.float32)
+        self._ctrl_range = jnp.asarray(m.actuator_ctrlrange, jnp.float32)
+        self._feet = np.array([m.geom(g).id for g in robot.feet_geoms])
+        self._body_geoms = np.array([m.geom(g).id for g in robot.body_geoms])
+        self._calf_bodies = np.array([m.geom_bodyid[m.geom(g).id] for g in robot.calf_geoms])
+        self._contacts = MjxContactReader(m, self.mjx_model, np.concatenate([self._feet, self._body_geoms]))
+        self._floor = jnp.asarray(terrain.floor)
+        self._ceiling = jnp.asarray(terrain.ceiling)
+        self._origin = jnp.asarray(terrain.origin, jnp.float32)
+        self._base_fields = {k: jnp.asarray(getattr(m, k)) for k in (
+            "body_mass", "body_inertia", "body_ipos", "pair_friction", "actuator_gainprm", "actuator_biasprm")}
+        self._weight = float(m.body_subtreemass[self._trunk] * 9.81)
+        self._obs_size = None
+
+    # ----------------------------------------------------------------- task hooks
+    @abc.abstractmethod
+    def _task_reset(self, rng: jax.Array) -> tuple[jax.Array, jax.Array, dict]:
+        """Spawn position (3,), yaw, and the task's entries of `info`."""
+
+    @abc.abstractmethod
+    def _command(self, data, info: dict) -> jax.Array:
+        """The command part of the observation."""
+
+    @abc.abstractmethod
+    def _exteroception(self, data, info: dict) -> tuple[jax.Array, jax.Array]:
+        """Clean exteroceptive observation (e.g. height scans) and its noise scale (same shape)."""
+
+    @abc.abstractmethod
+    def _task_step(self, data, info: dict, action: jax.Array) -> tuple[dict, jax.Array, dict, dict]:
+        """Weighted reward terms, success flag, task metrics and updated info after a physics step."""
+
+    def _task_privileged(self, data, info: dict) -> jax.Array:
+        """Extra privileged observation of the task (default: none)."""
+        return jnp.zeros(0)
+
+    # ----------------------------------------------------------------- helpers for tasks
+    def floor_height(self, xy):
+        """Exact floor height under world points xy (..., 2)."""
+        return surface_height(self._floor, self._origin, self.terrain.resolution, xy)
+
+    def ceiling_height(self, xy):
+        """Exact ceiling height over world points xy (..., 2)."""
+        return surface_height(self._ceiling, self._origin, self.terrain.resolution, xy, anti_diagonal=True)
+
+    def base_rotation(self, data) -> jax.Array:
+        """World-from-body rotation matrix of the base."""
+        return data.xmat[self._trunk]
+
+    def base_yaw(self, data) -> jax.Array:
+        """Heading of the base."""
+        rot = self.base_rotation(data)
+        return jnp.arctan2(rot[1, 0], rot[0, 0])
+
+    def joint_angles(self, data) -> jax.Array:
+        """Actuated joint positions in policy order."""
+        return data.qpos[self._qadr]
+
+    def joint_velocities(self, data) -> jax.Array:
+        """Actuated joint velocities in policy order."""
+        return data.qvel[self._vadr]
+
+    # ----------------------------------------------------------------- Brax Env API
+    @property
+    def dt(self) -> float:
+        """Control period, seconds."""
+        return self.config.ctrl_dt
+
+    @property
+    def action_size(self) -> int:
+        return self.robot.num_joints
+
+    @property
+    def observation_size(self):
+        if self._obs_size is None:
+            shapes = jax.eval_shape(self.reset, jax.random.PRNGKey(0)).obs
+            self._obs_size = {k: v.shape for k, v in shapes.items()}
+        return self._obs_size
+
+    @property
+    def backend(self) -> str:
+        return "mjx"
+
+    def randomize(self, rng: jax.Array) -> dict:
+        """Sample dynamics randomisation parameters (nominal values when disabled)."""
+        c, nb, nu = self.config.randomization, self.mj_model.nbody, self.mj_model.nu
+        if not c.enabled:
+            return dict(friction=jnp.float32(self._base_fields["pair_friction"][0, 0]), mass_scale=jnp.ones(nb),
+                        base_mass=jnp.float32(0.0), com=jnp.zeros(3), strength=jnp.ones(nu),
+                        kp=jnp.float32(1.0), kd=jnp.float32(1.0))
+        k = jax.random.split(rng, 7)
+        u = lambda key, r, shape=(): jax.random.uniform(key, shape, minval=r[0], maxval=r[1])
+        return dict(friction=u(k[0], c.friction), mass_scale=u(k[1], c.link_mass_scale, (nb,)),
+                    base_mass=u(k[2], c.base_mass_offset), com=u(k[3], (-c.com_offset, c.com_offset), (3,)),
+                    strength=u(k[4], c.motor_strength, (nu,)), kp=u(k[5], c.kp_scale), kd=u(k[6], c.kd_scale))
+
+    def model_with(self, dr: dict):
+        """The MJX model with randomisation `dr` applied (the nominal model when disabled)."""
+        if not self.config.randomization.enabled:
+            return self.mjx_model
+        return self.mjx_model.replace(**randomized_fields(self._base_fields, dr, self._trunk))
+
+    def joint_targets(self, action: jax.Array) -> jax.Array:
+        """PD targets (actuator controls) for an action."""
+        a = jnp.clip(action, -self.config.action_clip, self.config.action_clip)
+        target = self._default_pose + self.robot.action_scale * a
+        return jnp.clip(target, self._ctrl_range[:, 0], self._ctrl_range[:, 1])
+
+    def physics_step(self, dr: dict, data, action: jax.Array):
+        """Advance MJX physics by one control period with the action's PD targets."""
+        model = self.model_with(dr)
+        data = data.replace(ctrl=self.joint_targets(action))
+        return jax.lax.scan(lambda d, _: (mjx.step(model, d), None), data, None, length=self.n_substeps)[0]
+
+    def contact_forces(self, data) -> jax.Array:
+        """Normal contact force on each foot, then on each body geom (N)."""
+        return self._contacts(data)
+
+    def reset(self, rng: jax.Array) -> State:
+        rng, k_dr, k_task, k_noise = jax.random.split(rng, 4)
+        dr = self.randomize(k_dr)
+        pos, yaw, task_info = self._task_reset(k_task)
+        qpos = jnp.zeros(self.mj_model.nq).at[0:3].set(pos).at[3:7].set(quat_from_yaw(yaw))
+        qpos = qpos.at[self._qadr].set(self._default_pose)
+        model = self.model_with(dr)
+        data = mjx.make_data(model).replace(qpos=qpos, ctrl=self._default_pose)
+        data = mjx.forward(model, data)
+        info = dict(rng=rng, dr=dr, last_action=jnp.zeros(self.action_size), last_qvel=jnp.zeros(self.action_size),
+                    step=jnp.int32(0), collisions=jnp.float32(0.0), truncation=jnp.float32(0.0), **task_info)
+        forces = self.contact_forces(data)
+        obs = self._observe(data, info, forces, k_noise)
+        probe = State(data, obs, jnp.float32(0), jnp.float32(0), {}, info)
+        metrics = jax.tree_util.tree_map(jnp.zeros_like, self.transition(probe, data, info["last_action"], forces).metrics)
+        return State(data, obs, jnp.float32(0.0), jnp.float32(0.0), metrics, info)
+
+    def step(self, state: State, action: jax.Array) -> State:
+        data = self.physics_step(state.info["dr"], state.pipeline_state, action)
+        return self.transition(state, data, action, self.contact_forces(data))
+
+    # ----------------------------------------------------------------- shared transition
+    def transition(self, state: State, data, action: jax.Array, forces: jax.Array) -> State:
+        """Next State from stepped physics `data` (MJX or native) and contact forces; pure and jittable."""
+        cfg = self.config
+        bad = ~(jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
+                & jnp.all(jnp.abs(data.qvel) < cfg.divergence_qvel))
+        data = jax.tree_util.tree_map(lambda new, old: jnp.where(bad, old, new), data, state.pipeline_state)
+        forces = jnp.where(bad, 0.0, forces)
+        info = dict(state.info)
+        info["rng"], k_noise = jax.random.split(info["rng"])
+        info["step"] = info["step"] + 1
+        action = jnp.where(bad, 0.0, action)
+
+        terms, success, task_metrics, info = self._task_step(data, info, action)
+        n_feet = len(self._feet)
+        body_hits = jnp.sum(forces[n_feet:] > 1e-6)
+        knee_hits = self._knee_hits(data)
+        collisions = body_hits + knee_hits
+        info["collisions"] = info["collisions"] + collisions
+        qd = self.joint_velocities(data)
+        terms.update(self._penalties(data, info, action, qd, collisions))
+
+        base = data.xpos[self._trunk]
+        height = base[2] - self.floor_height(base[:2])
+        fell = (height < cfg.fall_height) | (up_z(self.base_rotation(data)) < cfg.flip_up_z)
+        time_out = info["step"] >= cfg.episode_steps
+        done = fell | success | time_out | bad
+        reward = jnp.where(bad, 0.0, sum(terms.values()))
+        info["truncation"] = (time_out & ~fell & ~success & ~bad).astype(jnp.float32)
+        info["last_action"], info["last_qvel"] = action, qd
+        obs = self._observe(data, info, forces, k_noise)
+        metrics = {f"reward/{k}": v for k, v in terms.items()}
+        metrics.update(task_metrics, diverged=bad.astype(jnp.float32), fell=fell.astype(jnp.float32),
+                       collisions=info["collisions"], base_height=height)
+        return state.replace(pipeline_state=data, obs=obs, reward=reward.astype(jnp.float32),
+                             done=done.astype(jnp.float32), metrics=metrics, info=info)
+
+    def _knee_hits(self, data) -> jax.Array:
+        """Knees touching floor or ceiling, checked exactly against the height maps (2 cm radius)."""
+        knees = data.xpos[self._calf_bodies]
+        low = knees[:, 2] - 0.02 < self.floor_height(knees[:, :2])
+        high = knees[:, 2] + 0.02 > self.ceiling_height(knees[:, :2])
+        return jnp.sum(low | high)
+
+    def _penalties(self, data, info, action, qd, collisions) -> dict:
+        """Penalty terms shared by all tasks (scales from the task config's `penalties`)."""
+        p = self.penalty_scales
+        q = self.joint_angles(data)
+        lo, hi = self.mj_model.jnt_range[1:, 0], self.mj_model.jnt_range[1:, 1]
+        soft = 0.05 * (hi - lo)
+        limit = jnp.sum(jnp.clip(lo + soft - q, 0.0) + jnp.clip(q - hi + soft, 0.0))
+        torque = data.actuator_force
+        return {
+            "joint_acc": p.joint_acc * jnp.sum(jnp.square((qd - info["last_qvel"]) / self.dt)),
+            "torques": p.torques * jnp.sum(jnp.square(torque)),
+            "joint_limits": p.joint_limits * limit,
+            "collisions": p.collisions * collisions,
+            "action_rate": p.action_rate * jnp.sum(jnp.square(action - info["last_action"])),
+        }
+
+    @property
+    @abc.abstractmethod
+    def penalty_scales(self):
+        """The task's PenaltyScales."""
+
+    # ----------------------------------------------------------------- observations
+    def _observe(self, data, info, forces, rng) -> dict:
+        noise = self.config.noise
+        rot = self.base_rotation(data)
+        gravity = rotate_inv(rot, jnp.array([0.0, 0.0, -1.0]))
+        q = self.joint_angles(data) - self._default_pose
+        qd = self.joint_velocities(data)
+        ext, ext_noise = self._exteroception(data, info)
+        cmd = self._command(data, info)
+        parts = [gravity, cmd, q, qd, info["last_action"], ext]
+        scales = [jnp.full(3, noise.gravity), jnp.zeros_like(cmd), jnp.full_like(q, noise.joint_pos),
+                  jnp.full_like(qd, noise.joint_vel), jnp.zeros(self.action_size), ext_noise]
+        clean = jnp.concatenate(parts)
+        state = clean
+        if noise.enabled:
+            state = clean + jnp.concatenate(scales) * jax.random.uniform(rng, clean.shape, minval=-1, maxval=1)
+        dr = info["dr"]
+        lin_vel = rotate_inv(rot, data.qvel[0:3])
+        privileged = jnp.concatenate([
+            clean, lin_vel, data.qvel[3:6], forces / self._weight,
+            jnp.stack([dr["friction"], dr["base_mass"], dr["kp"], dr["kd"]]), dr["com"], dr["strength"],
+            self._task_privileged(data, info)])
+        return {"state": state, "privileged_state": privileged}

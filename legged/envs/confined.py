@@ -1,0 +1,202 @@
+"""Confined-space navigation for a quadruped: tunnels with floors and ceilings (PAPERS.md section 1).
+
+One environment class, four tasks that differ only in what the policy is told and rewarded for:
+- `waypoints` (hierarchical follower): the next body-pose waypoint of a planned path;
+- `goal` (end-to-end baseline): only the far goal;
+- `velocity` (baseline): a velocity command toward the next waypoint, rewarded for tracking it;
+- `skills` (parameterised-skills baseline): velocity plus body height, roll and pitch of the waypoint.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Literal, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from legged.envs.base import LeggedEnv
+from legged.envs.config import EnvConfig, PenaltyScales
+from legged.envs.math import roll_pitch, yaw_rotate
+from legged.envs.paths import pad_paths, straight_path
+from legged.envs.rewards import tracking, wrap_angle
+from legged.robots import GO1
+from legged.robots.spec import RobotSpec
+from legged.sensors.heightscan import ScanConfig, scan_points_world
+from legged.worlds.generator import WorldConfig
+from legged.worlds.mjcf import SceneOptions
+from legged.worlds.terrain import Terrain
+
+Mode = Literal["waypoints", "goal", "velocity", "skills"]
+
+
+@dataclasses.dataclass(frozen=True)
+class ConfinedRewards:
+    """Weights of the confined-navigation reward terms."""
+
+    goal_reached: float = 10.0
+    """Once, when the body centre comes within `goal_radius` of the goal."""
+    waypoint_reached: float = 1.0
+    """Each time the current waypoint is reached (waypoints, velocity, skills modes)."""
+    exploration: float = 1.0
+    """Times the base velocity projected on the direction to the current target (m/s)."""
+    stalling: float = -1.0
+    """Per step while slow and still far from the current target."""
+    tracking_lin_vel: float = 1.0
+    """exp(-|v_cmd - v|^2 / 0.25) in velocity and skills modes."""
+    tracking_yaw_rate: float = 0.5
+    """exp(-(w_cmd - w)^2 / 0.25) in velocity and skills modes."""
+    tracking_pose: float = 1.0
+    """exp(-(height, roll, pitch error)^2 / 0.02) in skills mode."""
+
+
+@dataclasses.dataclass(frozen=True)
+class ConfinedConfig(EnvConfig):
+    """A confined-space navigation task."""
+
+    mode: Mode = "waypoints"
+    """What the policy is given: waypoints, goal, velocity or skills (see module docstring)."""
+    num_worlds: int = 16
+    """Worlds tiled into the training terrain; each episode picks one at random."""
+    world_seed: int = 0
+    """Seed of the tiled worlds."""
+    difficulties: tuple[int, ...] = (0, 1, 2)
+    """Difficulty levels cycled over the worlds."""
+    world: WorldConfig = WorldConfig()
+    """World generator settings."""
+    scan: ScanConfig = ScanConfig()
+    """Floor and ceiling height-scan grid."""
+    waypoint_spacing: float = 0.5
+    """Spacing of the default straight-line path (used until planned paths are handed in)."""
+    waypoint_radius: float = 0.25
+    """A waypoint counts as reached within this horizontal distance, metres."""
+    goal_radius: float = 0.2
+    """The goal counts as reached within this horizontal distance, metres."""
+    stall_speed: float = 0.1
+    """Below this base speed (m/s) ..."""
+    stall_distance: float = 0.3
+    """... while farther than this from the target (m), a step counts as stalling."""
+    command_speed: float = 0.5
+    """Commanded speed toward the waypoint in velocity and skills modes, m/s."""
+    six_dof_command: bool = False
+    """Waypoints mode: add target height, roll, pitch and relative yaw to the 2-D command."""
+    spawn_yaw: float = 0.3
+    """Initial heading is uniform in +-this, radians."""
+    rewards: ConfinedRewards = ConfinedRewards()
+    """Task reward weights."""
+    penalties: PenaltyScales = PenaltyScales()
+    """Penalty weights."""
+
+
+class ConfinedEnv(LeggedEnv):
+    """Go1 in tiled confined worlds, following waypoints (or a goal, or commands) to the goal."""
+
+    def __init__(self, config: ConfinedConfig = ConfinedConfig(), robot: RobotSpec = GO1,
+                 terrain: Terrain | None = None, paths: Sequence[np.ndarray] | None = None):
+        terrain = terrain or Terrain.generate(config.num_worlds, config.world_seed, config.difficulties, config.world)
+        super().__init__(robot, terrain, SceneOptions(), config)
+        if paths is None:
+            paths = [straight_path(s, g, config.waypoint_spacing) for s, g in zip(terrain.starts, terrain.goals)]
+        path_array, lengths = pad_paths(list(paths), terrain)
+        self._paths, self._path_len = jnp.asarray(path_array), jnp.asarray(lengths)
+        self._starts = jnp.asarray(terrain.starts, jnp.float32)
+        self._goals = jnp.asarray(terrain.goals, jnp.float32)
+        self._scan_points = jnp.asarray(config.scan.points(), jnp.float32)
+
+    @property
+    def penalty_scales(self) -> PenaltyScales:
+        return self.config.penalties
+
+    # ----------------------------------------------------------------- hooks
+    def _task_reset(self, rng):
+        k_tile, k_yaw = jax.random.split(rng)
+        tile = jax.random.randint(k_tile, (), 0, self.terrain.num_tiles)
+        start = self._starts[tile]
+        z = self.floor_height(start[:2]) + self.robot.standing_height + 0.02
+        yaw = jax.random.uniform(k_yaw, minval=-self.config.spawn_yaw, maxval=self.config.spawn_yaw)
+        info = dict(tile=tile, waypoint=jnp.int32(1), goal=self._goals[tile])
+        return jnp.array([start[0], start[1], z]), yaw, info
+
+    def _target(self, info) -> jax.Array:
+        """Current target pose (x, y, z, roll, pitch, yaw): the goal in goal mode, else the waypoint."""
+        if self.config.mode == "goal":
+            return jnp.concatenate([info["goal"], jnp.zeros(3)])
+        return self._paths[info["tile"], info["waypoint"]]
+
+    def _velocity_command(self, data, info) -> jax.Array:
+        """(vx, vy, yaw rate) in the yaw frame that heads for the current target."""
+        base, yaw = data.xpos[self._trunk], self.base_yaw(data)
+        rel = yaw_rotate(yaw, self._target(info)[:2] - base[:2])
+        dist = jnp.linalg.norm(rel)
+        v = self.config.command_speed * rel / jnp.maximum(dist, 1e-6) * jnp.minimum(dist / 0.3, 1.0)
+        yaw_rate = jnp.clip(2.0 * jnp.arctan2(rel[1], rel[0]), -1.0, 1.0) * (dist > 0.1)
+        return jnp.array([v[0], v[1], yaw_rate])
+
+    def _command(self, data, info):
+        mode, target = self.config.mode, self._target(info)
+        base, yaw = data.xpos[self._trunk], self.base_yaw(data)
+        rel = yaw_rotate(yaw, target[:2] - base[:2])
+        if mode in ("waypoints", "goal"):
+            if mode == "waypoints" and self.config.six_dof_command:
+                return jnp.concatenate([rel, jnp.stack([target[2] - base[2], target[3], target[4],
+                                                        wrap_angle(target[5] - yaw)])])
+            return rel
+        cmd = self._velocity_command(data, info)
+        if mode == "skills":
+            height = target[2] - self.floor_height(target[:2])
+            cmd = jnp.concatenate([cmd, jnp.stack([height, target[3], target[4]])])
+        return cmd
+
+    def _exteroception(self, data, info):
+        base, yaw = data.xpos[self._trunk], self.base_yaw(data)
+        xy = scan_points_world(base, yaw, self._scan_points)
+        clip = self.config.scan.clip
+        floor = jnp.clip(self.floor_height(xy) - base[2], -clip, clip)
+        ceiling = jnp.clip(self.ceiling_height(xy) - base[2], -clip, clip)
+        scans = jnp.concatenate([ceiling, floor])
+        return scans, jnp.full_like(scans, self.config.noise.height_scan)
+
+    def _task_privileged(self, data, info):
+        base = data.xpos[self._trunk]
+        return jnp.stack([base[2] - self.floor_height(base[:2]), self.ceiling_height(base[:2]) - base[2]])
+
+    def _task_step(self, data, info, action):
+        cfg, w = self.config, self.config.rewards
+        base, vel = data.xpos[self._trunk], data.qvel[0:3]
+        target = self._target(info)
+        to_target = target[:2] - base[:2]
+        dist = jnp.linalg.norm(to_target)
+        goal_dist = jnp.linalg.norm(info["goal"][:2] - base[:2])
+        success = goal_dist < cfg.goal_radius
+        last = info["waypoint"] >= self._path_len[info["tile"]] - 1
+        reached = (dist < cfg.waypoint_radius) & ~last & (cfg.mode != "goal")
+        speed = jnp.linalg.norm(vel[:2])
+        terms = {
+            "goal_reached": w.goal_reached * success,
+            "waypoint_reached": w.waypoint_reached * reached,
+            "stalling": w.stalling * ((speed < cfg.stall_speed) & (dist > cfg.stall_distance)),
+        }
+        if cfg.mode in ("waypoints", "goal"):
+            terms["exploration"] = w.exploration * jnp.dot(vel[:2], to_target / jnp.maximum(dist, 1e-6))
+        else:
+            cmd = self._velocity_command(data, info)
+            yaw = self.base_yaw(data)
+            local = yaw_rotate(yaw, vel[:2])
+            yaw_rate = (self.base_rotation(data) @ data.qvel[3:6])[2]
+            terms["tracking_lin_vel"] = w.tracking_lin_vel * tracking(jnp.sum(jnp.square(cmd[:2] - local)), 0.25)
+            terms["tracking_yaw_rate"] = w.tracking_yaw_rate * tracking(jnp.square(cmd[2] - yaw_rate), 0.25)
+            if cfg.mode == "skills":
+                roll, pitch = roll_pitch(self.base_rotation(data))
+                height = base[2] - self.floor_height(base[:2])
+                err = (jnp.square(target[2] - self.floor_height(target[:2]) - height)
+                       + jnp.square(target[3] - roll) + jnp.square(target[4] - pitch))
+                terms["tracking_pose"] = w.tracking_pose * tracking(err, 0.02)
+        info["waypoint"] = jnp.where(reached, info["waypoint"] + 1, info["waypoint"])
+        metrics = {
+            "success": success.astype(jnp.float32),
+            "time_to_goal_s": jnp.where(success, info["step"] * self.dt, 0.0),
+            "final_distance_m": goal_dist,
+            "waypoint_index": info["waypoint"].astype(jnp.float32),
+        }
+        return terms, success, metrics, info

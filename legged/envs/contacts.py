@@ -1,0 +1,51 @@
+"""Contact read-out (normal force per geom of interest) for MJX and for native MuJoCo.
+
+The only physics-engine-specific part of the environments: everything else (observations, rewards,
+terminations) is shared code that receives a `(n_geoms,)` array of normal forces from here.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+from mujoco import mjx
+
+
+class MjxContactReader:
+    """Normal contact force on each listed geom, from an MJX data (static efc layout, jittable)."""
+
+    def __init__(self, mj_model: mujoco.MjModel, mjx_model, geom_ids: np.ndarray):
+        if mj_model.opt.cone != mujoco.mjtCone.mjCONE_PYRAMIDAL:
+            raise ValueError("contact read-out expects a pyramidal friction cone")
+        probe = mjx.forward(mjx_model, mjx.make_data(mjx_model))
+        contact = probe._impl.contact
+        geoms = np.asarray(contact.geom)
+        addr = np.asarray(contact.efc_address)
+        dims = np.asarray(contact.dim)
+        self._rows = np.stack([addr + k for k in range(2 * (int(dims.max()) - 1))], -1) if len(addr) else None
+        self._valid = (addr >= 0).astype(np.float32)
+        # match[c, g] = 1 when contact c touches the g-th geom of interest.
+        self._match = ((geoms[:, :1] == geom_ids[None]) | (geoms[:, 1:] == geom_ids[None])).astype(np.float32)
+        self._num_geoms = len(geom_ids)
+
+    def __call__(self, data) -> jax.Array:
+        if self._rows is None:
+            return jnp.zeros(self._num_geoms)
+        # With a pyramidal cone the normal force is the sum of the pyramid edge forces.
+        normal = data._impl.efc_force[self._rows].sum(-1) * self._valid
+        return normal @ self._match
+
+
+def native_contact_forces(model: mujoco.MjModel, data: mujoco.MjData, geom_ids: np.ndarray) -> np.ndarray:
+    """Same read-out as MjxContactReader for a native MjData."""
+    out = np.zeros(len(geom_ids))
+    wrench = np.zeros(6)
+    for i in range(data.ncon):
+        c = data.contact[i]
+        hit = (geom_ids == c.geom1) | (geom_ids == c.geom2)
+        if hit.any() and c.efc_address >= 0:
+            mujoco.mj_contactForce(model, data, i, wrench)
+            out[hit] += wrench[0]
+    return out

@@ -1,0 +1,86 @@
+"""go1-flat: velocity tracking on flat ground, the sanity task for training pipelines."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+
+from legged.envs.base import LeggedEnv
+from legged.envs.config import EnvConfig, PenaltyScales
+from legged.envs.math import yaw_rotate
+from legged.envs.rewards import tracking
+from legged.robots import GO1
+from legged.robots.spec import RobotSpec
+from legged.worlds.mjcf import SceneOptions
+from legged.worlds.terrain import Terrain
+
+
+@dataclasses.dataclass(frozen=True)
+class FlatRewards:
+    """Weights of the velocity-tracking reward terms."""
+
+    tracking_lin_vel: float = 1.0
+    """exp(-|v_cmd - v_xy|^2 / 0.25), velocities in the yaw frame."""
+    tracking_yaw_rate: float = 0.5
+    """exp(-(w_cmd - w_z)^2 / 0.25)."""
+    lin_vel_z: float = -2.0
+    """Times the squared vertical base velocity."""
+    ang_vel_xy: float = -0.05
+    """Times the squared roll and pitch rates."""
+
+
+@dataclasses.dataclass(frozen=True)
+class FlatConfig(EnvConfig):
+    """Velocity tracking on an infinite plane."""
+
+    lin_vel_x: tuple[float, float] = (-1.0, 1.0)
+    """Range of the commanded forward velocity, m/s (sampled at reset)."""
+    lin_vel_y: tuple[float, float] = (-0.5, 0.5)
+    """Range of the commanded lateral velocity, m/s."""
+    yaw_rate: tuple[float, float] = (-1.0, 1.0)
+    """Range of the commanded yaw rate, rad/s."""
+    rewards: FlatRewards = FlatRewards()
+    """Task reward weights."""
+    penalties: PenaltyScales = PenaltyScales(collisions=-1.0)
+    """Penalty weights."""
+
+
+class FlatEnv(LeggedEnv):
+    """A robot on flat ground tracking a random (vx, vy, yaw rate) command."""
+
+    def __init__(self, config: FlatConfig = FlatConfig(), robot: RobotSpec = GO1):
+        super().__init__(robot, Terrain.flat(), SceneOptions(flat=True), config)
+
+    @property
+    def penalty_scales(self) -> PenaltyScales:
+        return self.config.penalties
+
+    def _task_reset(self, rng):
+        c = self.config
+        k = jax.random.split(rng, 4)
+        cmd = jnp.stack([jax.random.uniform(k[i], minval=r[0], maxval=r[1])
+                         for i, r in enumerate((c.lin_vel_x, c.lin_vel_y, c.yaw_rate))])
+        yaw = jax.random.uniform(k[3], minval=-jnp.pi, maxval=jnp.pi)
+        return jnp.array([0.0, 0.0, self.robot.standing_height + 0.02]), yaw, dict(command=cmd)
+
+    def _command(self, data, info):
+        return info["command"]
+
+    def _exteroception(self, data, info):
+        return jnp.zeros(0), jnp.zeros(0)
+
+    def _task_step(self, data, info, action):
+        w, cmd = self.config.rewards, info["command"]
+        rot = self.base_rotation(data)
+        local = yaw_rotate(self.base_yaw(data), data.qvel[0:2])
+        ang = rot @ data.qvel[3:6]
+        terms = {
+            "tracking_lin_vel": w.tracking_lin_vel * tracking(jnp.sum(jnp.square(cmd[:2] - local)), 0.25),
+            "tracking_yaw_rate": w.tracking_yaw_rate * tracking(jnp.square(cmd[2] - ang[2]), 0.25),
+            "lin_vel_z": w.lin_vel_z * jnp.square(data.qvel[2]),
+            "ang_vel_xy": w.ang_vel_xy * jnp.sum(jnp.square(data.qvel[3:5])),
+        }
+        metrics = {"command_speed": jnp.linalg.norm(cmd[:2]), "speed": jnp.linalg.norm(local)}
+        return terms, jnp.bool_(False), metrics, info

@@ -1,0 +1,31 @@
+"""Small rotation helpers used by the environments (jax.numpy)."""
+
+import jax.numpy as jnp
+
+
+def quat_from_yaw(yaw):
+    """Unit quaternion (w, x, y, z) of a rotation by `yaw` about z."""
+    return jnp.array([jnp.cos(yaw / 2), 0.0, 0.0, jnp.sin(yaw / 2)])
+
+
+def rotate_inv(rot, vec):
+    """Express a world vector in the frame of rotation matrix `rot` (world-from-body)."""
+    return rot.T @ vec
+
+
+def up_z(rot):
+    """World z component of the body's up axis (1 upright, -1 upside down)."""
+    return rot[2, 2]
+
+
+def yaw_rotate(yaw, xy):
+    """Rotate world x, y offsets into the frame turned by `yaw` about z."""
+    c, s = jnp.cos(yaw), jnp.sin(yaw)
+    return jnp.stack([c * xy[..., 0] + s * xy[..., 1], -s * xy[..., 0] + c * xy[..., 1]], -1)
+
+
+def roll_pitch(rot):
+    """Roll and pitch of a world-from-body rotation matrix (z-y-x Euler convention)."""
+    pitch = -jnp.arcsin(jnp.clip(rot[2, 0], -1.0, 1.0))
+    roll = jnp.arctan2(rot[2, 1], rot[2, 2])
+    return roll, pitch

@@ -1,0 +1,8 @@
+"""Robot specifications (joint order, default pose, gains, geoms) and their MJCF files."""
+
+from legged.robots.go1 import GO1
+from legged.robots.spec import RobotSpec
+
+ROBOTS = {"go1": GO1}
+
+__all__ = ["GO1", "ROBOTS", "RobotSpec"]

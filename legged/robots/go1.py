@@ -1,0 +1,26 @@
+"""Unitree Go1: the quadruped of the confined-space tasks."""
+
+from legged.robots.spec import ASSETS_DIR, RobotSpec
+
+_LEGS = ("FR", "FL", "RR", "RL")
+
+GO1 = RobotSpec(
+    name="go1",
+    mjcf_path=ASSETS_DIR / "robots" / "go1.xml",
+    root_body="trunk",
+    joint_names=tuple(f"{leg}_{part}_joint" for leg in _LEGS for part in ("hip", "thigh", "calf")),
+    # Standing pose of the paper's code base (walk-these-ways lineage): with Kp 20 the deeper
+    # 0.9 / -1.8 crouch of menagerie's keyframe collapses the rear legs.
+    default_pose=(-0.1, 0.8, -1.5, 0.1, 0.8, -1.5, -0.1, 1.0, -1.5, 0.1, 1.0, -1.5),
+    kp=20.0,
+    kd=0.5,
+    action_scale=0.25,
+    feet_geoms=_LEGS,
+    feet_sites=_LEGS,
+    body_geoms=("trunk_front", "trunk_mid", "trunk_rear"),
+    thigh_geoms=tuple(f"{leg}_thigh" for leg in _LEGS),
+    calf_geoms=tuple(f"{leg}_calf" for leg in _LEGS),
+    imu_site="imu",
+    body_box_half_extents=(0.188, 0.047, 0.057),
+    standing_height=0.27,
+)

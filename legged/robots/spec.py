@@ -1,0 +1,56 @@
+"""Robot specifications: everything an environment needs to know about a robot, as data."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+ASSETS_DIR = Path(__file__).resolve().parents[2] / "assets"
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotSpec:
+    """A legged robot as the environments see it; adding a robot means adding one of these."""
+
+    name: str
+    """Short name used in task names and logs."""
+    mjcf_path: Path
+    """MJCF file of the robot alone (no world); the scene builder adds floor, ceiling and contacts."""
+    root_body: str
+    """Body carrying the free joint (the base)."""
+    joint_names: tuple[str, ...]
+    """Actuated joints in policy order (the order of actions and joint observations)."""
+    default_pose: tuple[float, ...]
+    """Joint angles of the default standing pose, radians, in `joint_names` order."""
+    kp: float
+    """Proportional gain of the joint PD servos, N m / rad."""
+    kd: float
+    """Derivative gain of the joint PD servos, N m s / rad."""
+    action_scale: float
+    """Joint target = default pose + action_scale * action."""
+    feet_geoms: tuple[str, ...]
+    """Foot collision geoms (spheres), in leg order."""
+    feet_sites: tuple[str, ...]
+    """Foot sites, in leg order."""
+    body_geoms: tuple[str, ...]
+    """Trunk collision geoms; a contact on them counts as a body collision."""
+    thigh_geoms: tuple[str, ...]
+    """Thigh collision geoms."""
+    calf_geoms: tuple[str, ...]
+    """Calf collision geoms."""
+    imu_site: str
+    """Site of the IMU (gyro, velocimeter) on the base."""
+    body_box_half_extents: tuple[float, float, float]
+    """Half sizes of the trunk box (x, y, z) used by planners and clearance checks, metres."""
+    standing_height: float
+    """Base height above flat ground at the default pose, metres (measured, see tests)."""
+
+    @property
+    def num_joints(self) -> int:
+        """Number of actuated joints (= action size)."""
+        return len(self.joint_names)
+
+    @property
+    def collision_geoms(self) -> tuple[str, ...]:
+        """All geoms whose contact with the world is a penalised collision (not the feet)."""
+        return self.body_geoms + self.thigh_geoms + self.calf_geoms

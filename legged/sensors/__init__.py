@@ -1,0 +1,1 @@
+"""Sensors that read the world the cheapest exact way (height-map look-ups, ray casts)."""

@@ -1,0 +1,106 @@
+"""Realise a terrain as MJCF: floor and ceiling height fields, the robot, and explicit contact pairs.
+
+The ceiling is a height field turned upside down (180 degrees about x), so both surfaces are exact
+copies of the height maps, triangulated the way MuJoCo triangulates every height field.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import xml.etree.ElementTree as ET
+
+import mujoco
+import numpy as np
+
+from legged.robots.spec import RobotSpec
+from legged.worlds.terrain import Terrain
+
+FLOOR_GEOM = "floor"
+CEILING_GEOM = "ceiling"
+TERRAIN_GROUP = 0
+"""Geom group of floor and ceiling (ray casts for height scans look at this group only)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneOptions:
+    """How a terrain and a robot are put together into one model."""
+
+    flat: bool = False
+    """Use an infinite plane for the floor and no ceiling (flat-ground tasks)."""
+    collide_trunk: bool = True
+    """Add trunk-floor and trunk-ceiling contact pairs."""
+    collide_legs: bool = False
+    """Add thigh and calf contact pairs with the floor, and thighs with the ceiling (slow in MJX)."""
+    friction: float = 0.8
+    """Sliding friction of every contact pair."""
+    ceiling_alpha: float = 0.35
+    """Opacity of the ceiling in renderers (so the robot inside a tunnel stays visible)."""
+
+
+def _hfield_grid(heights: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """Normalised MuJoCo elevation data (rows along y) plus the height offset and range."""
+    lo, hi = float(heights.min()), float(heights.max())
+    rng = max(hi - lo, 1e-4)
+    # MuJoCo height fields have rows along y and columns along x; the `elevation` attribute lists
+    # rows from +y down to -y (image order), hence the flip.
+    return ((heights - lo) / rng).T[::-1], lo, rng
+
+
+def _add_hfield(asset, worldbody, name, heights, centre, top_z, flipped, rgba, res, thickness=0.1):
+    """Add a height-field asset and geom; a flipped one hangs from `top_z` with `heights` as depths."""
+    data, lo, rng = _hfield_grid(heights)
+    nrow, ncol = data.shape
+    size = f"{(ncol - 1) * res / 2:.6f} {(nrow - 1) * res / 2:.6f} {rng:.6f} {thickness}"
+    ET.SubElement(asset, "hfield", name=name, nrow=str(nrow), ncol=str(ncol), size=size,
+                  elevation=" ".join(f"{v:.6f}" for v in data.ravel()))
+    attrs = dict(name=name, type="hfield", hfield=name, group=str(TERRAIN_GROUP), rgba=rgba,
+                 contype="0", conaffinity="0")
+    if flipped:
+        attrs.update(pos=f"{centre[0]:.6f} {centre[1]:.6f} {top_z - lo:.6f}", quat="0 1 0 0")
+    else:
+        attrs.update(pos=f"{centre[0]:.6f} {centre[1]:.6f} {lo:.6f}")
+    ET.SubElement(worldbody, "geom", **attrs)
+
+
+def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions()) -> str:
+    """Standalone MJCF text: the robot file with the terrain and contact pairs added."""
+    if not robot.mjcf_path.is_file():
+        raise FileNotFoundError(f"robot model not found: {robot.mjcf_path} (reinstall the package assets)")
+    root = ET.parse(robot.mjcf_path).getroot()
+    root.set("model", f"{robot.name}_{'flat' if options.flat else 'confined'}")
+    asset = root.find("asset") if root.find("asset") is not None else ET.SubElement(root, "asset")
+    worldbody = root.find("worldbody")
+    ET.SubElement(asset, "texture", name="grid", type="2d", builtin="checker", width="256", height="256",
+                  rgb1="0.35 0.4 0.45", rgb2="0.3 0.35 0.4")
+    ET.SubElement(asset, "material", name="grid", texture="grid", texrepeat="8 8", texuniform="true")
+    ET.SubElement(worldbody, "light", name="sun", pos="0 0 6", dir="0 0 -1", directional="true")
+    res = terrain.resolution
+    centre = terrain.origin + res * (np.array(terrain.shape) - 1) / 2
+    surfaces = [FLOOR_GEOM]
+    if options.flat:
+        ET.SubElement(worldbody, "geom", name=FLOOR_GEOM, type="plane", size="0 0 0.05", material="grid",
+                      group=str(TERRAIN_GROUP), contype="0", conaffinity="0")
+    else:
+        _add_hfield(asset, worldbody, FLOOR_GEOM, terrain.floor, centre, None, False, "0.55 0.5 0.45 1", res)
+        top = float(terrain.ceiling_top)
+        depth = (top - terrain.ceiling)[:, ::-1]  # depth below `top`; 180 deg about x mirrors y
+        _add_hfield(asset, worldbody, CEILING_GEOM, depth, centre, top, True,
+                    f"0.45 0.55 0.7 {options.ceiling_alpha}", res)
+        surfaces.append(CEILING_GEOM)
+    contact = ET.SubElement(root, "contact")
+    pairs = [(g, FLOOR_GEOM) for g in robot.feet_geoms]
+    if options.collide_trunk:
+        pairs += [(g, s) for g in robot.body_geoms for s in surfaces]
+    if options.collide_legs:
+        pairs += [(g, FLOOR_GEOM) for g in robot.thigh_geoms + robot.calf_geoms]
+        pairs += [(g, s) for g in robot.thigh_geoms for s in surfaces[1:]]
+    friction = f"{options.friction} {options.friction} 0.005 0.0001 0.0001"
+    for geom, surface in pairs:
+        ET.SubElement(contact, "pair", geom1=geom, geom2=surface, condim="3", friction=friction)
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode")
+
+
+def compile_scene(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions()) -> mujoco.MjModel:
+    """Compiled MjModel of the scene (the one source of truth for MJX, native MuJoCo and viewers)."""
+    return mujoco.MjModel.from_xml_string(scene_xml(terrain, robot, options))
