@@ -104,3 +104,26 @@ def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneO
 def compile_scene(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions()) -> mujoco.MjModel:
     """Compiled MjModel of the scene (the one source of truth for MJX, native MuJoCo and viewers)."""
     return mujoco.MjModel.from_xml_string(scene_xml(terrain, robot, options))
+
+
+def write_world(world, robot: RobotSpec, out_dir) -> dict:
+    """Write DIR/world.npz (the data) and DIR/world.xml (standalone MJCF with the robot at the start)."""
+    from pathlib import Path
+
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OSError(f"cannot create output directory {out}: {exc.strerror}") from exc
+    npz = world.save(out / "world.npz")
+    xml = scene_xml(Terrain.from_worlds([world]), robot)
+    root = ET.fromstring(xml)
+    body = root.find(f".//body[@name='{robot.root_body}']")
+    body.set("pos", " ".join(f"{v:.4f}" for v in (*world.start[:2], world.start[2] + 0.02)))
+    for key in root.iter("key"):  # keyframes would teleport the robot back to the origin
+        key.set("qpos", " ".join(f"{v:.4f}" for v in (*world.start[:2], world.start[2] + 0.02))
+                + " " + " ".join(key.get("qpos").split()[3:]))
+    path = out / "world.xml"
+    path.write_text(ET.tostring(root, encoding="unicode"))
+    mujoco.MjModel.from_xml_path(str(path))  # fail here, not in the user's viewer
+    return {"npz": str(npz), "xml": str(path)}

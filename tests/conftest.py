@@ -1,0 +1,34 @@
+"""Shared fixtures: environments are compiled once per test session (compilation dominates CPU time)."""
+
+import jax
+import pytest
+
+import legged  # noqa: F401  (quiet MJX import)
+from legged.envs import make
+from legged.envs.confined import ConfinedConfig, ConfinedEnv
+from legged.worlds import Terrain, generate_world
+
+BATCH = 8
+
+
+class Compiled:
+    """An env with its batched reset and step jitted once."""
+
+    def __init__(self, env):
+        self.env = env
+        self.reset = jax.jit(jax.vmap(env.reset))
+        self.step = jax.jit(jax.vmap(env.step))
+
+    def keys(self, seed=0, batch=BATCH):
+        return jax.random.split(jax.random.PRNGKey(seed), batch)
+
+
+@pytest.fixture(scope="session")
+def flat():
+    return Compiled(make("go1-flat"))
+
+
+@pytest.fixture(scope="session")
+def confined():
+    terrain = Terrain.from_worlds([generate_world(11, 0), generate_world(12, 2)])
+    return Compiled(ConfinedEnv(ConfinedConfig(mode="waypoints"), terrain=terrain))
