@@ -9,18 +9,21 @@ from legged.envs.confined import ConfinedConfig, ConfinedEnv
 from legged.worlds import Terrain, generate_world
 
 BATCH = 8
+"""Every test uses this one batch size: each new size would compile the env again (about a minute)."""
 
 
 class Compiled:
-    """An env with its batched reset and step jitted once."""
+    """An env with its batched reset, step and transition jitted once."""
 
     def __init__(self, env):
         self.env = env
         self.reset = jax.jit(jax.vmap(env.reset))
         self.step = jax.jit(jax.vmap(env.step))
+        self.transition = jax.jit(jax.vmap(env.transition))
+        self.contact_forces = jax.jit(jax.vmap(env.contact_forces))
 
-    def keys(self, seed=0, batch=BATCH):
-        return jax.random.split(jax.random.PRNGKey(seed), batch)
+    def keys(self, seed=0):
+        return jax.random.split(jax.random.PRNGKey(seed), BATCH)
 
 
 @pytest.fixture(scope="session")

@@ -46,7 +46,7 @@ def test_surface_height_matches_mj_ray_on_tiled_terrain():
 
 def test_env_scans_match_mj_ray_at_scan_points(confined):
     env = confined.env
-    state = confined.reset(confined.keys(3, 2))
+    state = confined.reset(confined.keys(3))
     data = mujoco.MjData(env.mj_model)
     mujoco.mj_forward(env.mj_model, data)
     scan_cfg = env.config.scan

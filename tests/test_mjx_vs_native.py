@@ -14,27 +14,30 @@ height-field contacts differently (README, "MJX vs native"): measured 0.028 m fo
 for the joints after 5 steps, so only the base is held to a (loose) bound here."""
 
 
-def _compare(env, steps, seed=0):
+def _compare(compiled, steps, seed=0):
+    """Step env 0 of a batch in MJX and the same state natively; max gaps in qpos, base, reward."""
+    env = compiled.env
+    batch = compiled.reset(compiled.keys(seed))
     native = NativeRunner(env)
-    state = native.reset(jax.random.PRNGKey(seed))
-    step = jax.jit(env.step)
+    native.start(jax.tree_util.tree_map(lambda x: x[0], batch))
     rng = np.random.default_rng(seed)
     gap, base_gap, reward_gap = 0.0, 0.0, 0.0
     for _ in range(steps):
         action = jnp.asarray(rng.uniform(-0.5, 0.5, env.action_size), jnp.float32)
-        state, nstate = step(state, action), native.step(action)
-        diff = jnp.abs(state.pipeline_state.qpos - nstate.pipeline_state.qpos)
+        batch = compiled.step(batch, jnp.broadcast_to(action, (batch.reward.shape[0], env.action_size)))
+        nstate = native.step(action)
+        diff = jnp.abs(batch.pipeline_state.qpos[0] - nstate.pipeline_state.qpos)
         gap, base_gap = max(gap, float(diff.max())), max(base_gap, float(diff[:3].max()))
-        reward_gap = max(reward_gap, abs(float(state.reward) - float(nstate.reward)))
+        reward_gap = max(reward_gap, abs(float(batch.reward[0]) - float(nstate.reward)))
     return gap, base_gap, reward_gap
 
 
 def test_flat_mjx_matches_native(flat):
-    gap, _, reward_gap = _compare(flat.env, 25)
+    gap, _, reward_gap = _compare(flat, 25)
     assert gap < FLAT_QPOS_TOL, gap
     assert reward_gap < 1e-2, reward_gap
 
 
 def test_confined_mjx_matches_native_short_horizon(confined):
-    _, base_gap, _ = _compare(confined.env, 5)
+    _, base_gap, _ = _compare(confined, 5)
     assert base_gap < CONFINED_BASE_TOL, base_gap

@@ -36,7 +36,10 @@ class NativeRunner:
 
     def reset(self, rng: jax.Array) -> State:
         """Start an episode: the env's own reset, copied into native MjData."""
-        state = self._reset(rng)
+        return self.start(self._reset(rng))
+
+    def start(self, state: State) -> State:
+        """Continue from an existing (unbatched) environment state, e.g. one made by the MJX env."""
         dr = jax.tree_util.tree_map(np.asarray, state.info["dr"])
         if self.env.config.randomization.enabled:
             for name, value in randomized_fields(self._nominal, dr, self.env._trunk, xp=np).items():
