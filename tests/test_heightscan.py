@@ -1,6 +1,5 @@
 """Height scans equal MuJoCo's own ray casts (mj_ray) on the compiled scene, floor and ceiling."""
 
-import jax
 import mujoco
 import numpy as np
 

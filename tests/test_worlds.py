@@ -8,7 +8,7 @@ import pytest
 
 from legged.cli import main
 from legged.robots import GO1
-from legged.worlds import Terrain, World, WorldConfig, WorldError, generate_world, write_world
+from legged.worlds import Terrain, World, WorldConfig, WorldError, generate_world
 
 
 @pytest.mark.parametrize("difficulty", [0, 1, 2, 4])
