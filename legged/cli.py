@@ -1,4 +1,4 @@
-"""The `legged` command line: worlds, benchmarks and the demo (training, planning and viewing come next)."""
+"""The `legged` command line: worlds, planning, benchmarks and the demo."""
 
 from __future__ import annotations
 
@@ -7,14 +7,19 @@ import json
 import sys
 
 
-def _int_list(text: str) -> list[int]:
-    try:
-        values = [int(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from None
-    if not values or min(values) < 1:
-        raise argparse.ArgumentTypeError(f"batch sizes must be positive integers, got {text!r}")
-    return values
+def _ints(minimum: int):
+    """Parser of comma-separated integers >= minimum (for argparse `type=`)."""
+
+    def parse(text: str) -> list[int]:
+        try:
+            values = [int(v) for v in text.split(",") if v.strip()]
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from None
+        if not values or min(values) < minimum:
+            raise argparse.ArgumentTypeError(f"expected comma-separated integers >= {minimum}, got {text!r}")
+        return values
+
+    return parse
 
 
 def cmd_world(args) -> int:
@@ -29,6 +34,93 @@ def cmd_world(args) -> int:
           f"min clearance={summary['min_clearance_m']} m\n  start={summary['start']} goal={summary['goal']}\n"
           f"  wrote {files['npz']} and {files['xml']}")
     return 0
+
+
+def _xyz(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z in metres, got {text!r}") from None
+    if len(values) != 3:
+        raise argparse.ArgumentTypeError(f"expected three comma-separated numbers X,Y,Z, got {text!r}")
+    return values
+
+
+def _planner_config(args):
+    from planners import PlannerConfig
+
+    config = PlannerConfig(planner=args.planner, time_limit=args.time_limit, seed=args.planner_seed,
+                           spacing=args.spacing)
+    config.validate()
+    return config
+
+
+def _scene_maps(args):
+    """Height maps sampled from a user's MJCF scene (errors name the file and the cause)."""
+    from pathlib import Path
+
+    import mujoco
+
+    from planners import maps_from_scene, reference_between
+
+    if args.start is None or args.goal is None:
+        raise ValueError("--scene needs --start X,Y,Z and --goal X,Y,Z (body centre, metres)")
+    path = Path(args.scene)
+    if not path.is_file():
+        raise FileNotFoundError(f"scene file not found: {path}")
+    try:
+        model = mujoco.MjModel.from_xml_path(str(path))
+    except ValueError as exc:
+        raise ValueError(f"cannot load scene {path}: {exc}") from None
+    return maps_from_scene(model, reference_between(args.start, args.goal), args.resolution)
+
+
+def cmd_plan(args) -> int:
+    import numpy as np
+
+    from planners import HeightMaps, plan_path
+    from legged.robots import GO1
+    from legged.worlds import generate_world
+
+    config = _planner_config(args)  # bad settings fail before any sampling
+    if args.scene:
+        maps, start, goal = _scene_maps(args), np.array(args.start), np.array(args.goal)
+    else:
+        world = generate_world(args.seed, args.difficulty)
+        maps = HeightMaps.from_world(world)
+        start = np.array(args.start) if args.start else world.start
+        goal = np.array(args.goal) if args.goal else world.goal
+    plan = plan_path(maps, start, goal, GO1, config)
+    if args.json:
+        print(json.dumps(plan.to_json()))
+    else:
+        print(f"{plan.planner}: {len(plan.waypoints)} waypoints, {plan.length_m:.3f} m, planned in "
+              f"{plan.plan_time_s:.3f} s\n  x y z roll pitch yaw:")
+        for pose in plan.waypoints:
+            print("  " + " ".join(f"{v:7.3f}" for v in pose))
+    return 0
+
+
+def cmd_bench_plan(args) -> int:
+    from planners.bench import bench_planner, print_table
+
+    records = bench_planner(args.difficulties, args.worlds, _planner_config(args), args.first_seed,
+                            progress=not args.quiet)
+    if args.json:
+        print(json.dumps(records))
+    else:
+        print_table(records)
+    return 0
+
+
+def _add_planner_options(parser) -> None:
+    from planners import PLANNERS
+
+    parser.add_argument("--planner", default="rrtconnect",
+                        help=f"OMPL planner: {', '.join(PLANNERS)} (RRT*, BIT* style names work too)")
+    parser.add_argument("--time-limit", type=float, default=5.0, help="seconds the planner may search")
+    parser.add_argument("--spacing", type=float, default=0.5, help="largest distance between waypoints, m")
+    parser.add_argument("--planner-seed", type=int, default=0, help="seed of OMPL's sampling")
 
 
 def cmd_bench(args) -> int:
@@ -78,7 +170,7 @@ def build_parser() -> argparse.ArgumentParser:
     bsub = b.add_subparsers(dest="what", required=True)
     be = bsub.add_parser("env", help="environment steps per second (MJX) beside native MuJoCo")
     be.add_argument("--task", default="confined-waypoints")
-    be.add_argument("--batch", type=_int_list, default=[1, 64, 256], help="comma-separated batch sizes")
+    be.add_argument("--batch", type=_ints(1), default=[1, 64, 256], help="comma-separated batch sizes")
     be.add_argument("--seconds", type=float, default=3.0, help="timed seconds per batch size")
     be.add_argument("--peer-python", default=None,
                     help="python of the MuJoCo Playground peer (../shared/peers); adds ratio_vs_peer")
@@ -86,6 +178,26 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--json", action="store_true", help="print a JSON list, one object per batch size")
     be.add_argument("--quiet", action="store_true", help="no progress messages")
     be.set_defaults(fn=cmd_bench)
+    bp = bsub.add_parser("plan", help="planning time and path length per difficulty over generated worlds")
+    bp.add_argument("--difficulties", type=_ints(0), default=[0, 1, 2], help="comma-separated levels")
+    bp.add_argument("--worlds", type=int, default=20, help="worlds per difficulty (seeds first-seed onward)")
+    bp.add_argument("--first-seed", type=int, default=0)
+    _add_planner_options(bp)
+    bp.add_argument("--json", action="store_true", help="print a JSON list, one object per difficulty")
+    bp.add_argument("--quiet", action="store_true", help="no progress bars")
+    bp.set_defaults(fn=cmd_bench_plan)
+
+    pl = sub.add_parser("plan", help="plan body-pose waypoints through a generated world or an MJCF scene")
+    pl.add_argument("--seed", type=int, default=0, help="seed of the generated world")
+    pl.add_argument("--difficulty", type=int, default=0)
+    pl.add_argument("--scene", default=None, help="plan through this MJCF scene instead (needs --start, --goal)")
+    pl.add_argument("--start", type=_xyz, default=None, help="body centre X,Y,Z (default: the world's start)")
+    pl.add_argument("--goal", type=_xyz, default=None, help="body centre X,Y,Z (default: the world's goal)")
+    pl.add_argument("--resolution", type=float, default=0.05, help="map resolution when sampling --scene, m")
+    _add_planner_options(pl)
+    pl.add_argument("--json", action="store_true",
+                    help="print one JSON object: waypoints [x, y, z, roll, pitch, yaw], length_m, plan_time_s, planner")
+    pl.set_defaults(fn=cmd_plan)
 
     t = sub.add_parser("tasks", help="list the registered tasks")
     t.set_defaults(fn=cmd_tasks)
@@ -99,8 +211,20 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _join_negative_coordinates(argv: list[str]) -> list[str]:
+    """Let `--start -2,0,0.27` work: argparse would read '-2,0,0.27' as an option."""
+    out = []
+    for token in argv:
+        if out and out[-1] in ("--start", "--goal") and token[:1] == "-" and token[1:2].isdigit():
+            out[-1] = f"{out[-1]}={token}"
+        else:
+            out.append(token)
+    return out
+
+
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser().parse_args(_join_negative_coordinates(argv))
     from legged.envs.registry import UnknownTaskError
     from legged.worlds import WorldError
 

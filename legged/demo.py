@@ -1,4 +1,5 @@
-"""`legged demo`: a generated tunnel, Go1 held by its default controller, in MJX and native MuJoCo."""
+"""`legged demo`: a generated tunnel, an OMPL body-pose plan through it, and Go1 held by its default
+controller in MJX and native MuJoCo."""
 
 from __future__ import annotations
 
@@ -22,7 +23,12 @@ def run_demo(out: str, seconds: float, seed: int, difficulty: int) -> int:
     files = write_world(world, GO1, out)
     print(f"[demo] world seed={seed} difficulty={difficulty}: {world.summary()['size_m']} m, "
           f"min clearance {world.min_clearance:.2f} m -> {files['xml']}")
-    env = ConfinedEnv(ConfinedConfig(mode="waypoints"), terrain=Terrain.from_worlds([world]))
+    from planners import HeightMaps, PlannerConfig, plan_path
+
+    plan = plan_path(HeightMaps.from_world(world), world.start, world.goal, GO1, PlannerConfig())
+    print(f"[demo] {plan.planner} planned {len(plan.waypoints)} body-pose waypoints, {plan.length_m:.2f} m, "
+          f"in {plan.plan_time_s:.2f} s (lowest body height {plan.waypoints[:, 2].min():.3f} m)")
+    env = ConfinedEnv(ConfinedConfig(mode="waypoints"), terrain=Terrain.from_worlds([world]), paths=[plan.waypoints])
     print("[demo] compiling the MJX environment (about a minute on a laptop CPU) ...", flush=True)
     t0 = time.perf_counter()
     step = jax.jit(env.step)
@@ -39,6 +45,7 @@ def run_demo(out: str, seconds: float, seed: int, difficulty: int) -> int:
         gap = max(gap, float(jnp.abs(state.pipeline_state.qpos - nstate.pipeline_state.qpos).max()))
     report = {
         "world": files,
+        "plan": {"waypoints": len(plan.waypoints), "length_m": round(plan.length_m, 3), "planner": plan.planner},
         "simulated_s": round(float(state.info["step"]) * env.dt, 2),
         "base_height_m": round(float(state.metrics["base_height"]), 4),
         "fell": bool(state.metrics["fell"]),

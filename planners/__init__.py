@@ -1,0 +1,14 @@
+"""Classical planning: OMPL body-pose paths through confined worlds, handed to the environments as waypoints."""
+
+from planners.batch import cache_key, default_cache_dir, feasible_worlds, plan_world, plan_worlds
+from planners.body_check import BodyCheckConfig, BodyChecker
+from planners.body_planner import PLANNERS, Plan, PlannerConfig, PlanningError, plan_path, replan
+from planners.maps import HeightMaps
+from planners.planned_env import make_planned_env
+from planners.scene_maps import maps_from_scene, reference_between
+
+__all__ = [
+    "PLANNERS", "BodyCheckConfig", "BodyChecker", "HeightMaps", "Plan", "PlannerConfig", "PlanningError",
+    "cache_key", "default_cache_dir", "feasible_worlds", "make_planned_env", "maps_from_scene", "plan_path",
+    "plan_world", "plan_worlds", "reference_between", "replan",
+]

@@ -19,8 +19,9 @@ class MjxContactReader:
     def __init__(self, mj_model: mujoco.MjModel, mjx_model, geom_ids: np.ndarray):
         if mj_model.opt.cone != mujoco.mjtCone.mjCONE_PYRAMIDAL:
             raise ValueError("contact read-out expects a pyramidal friction cone")
-        probe = mjx.forward(mjx_model, mjx.make_data(mjx_model))
-        contact = probe._impl.contact
+        # The contact layout (which geoms, which constraint rows) is static in MJX: one jitted collision
+        # pass on the initial data reveals it (an eager mjx.forward took over a minute on a CPU).
+        contact = jax.jit(mjx.collision)(mjx_model, mjx.make_data(mjx_model))._impl.contact
         geoms = np.asarray(contact.geom)
         addr = np.asarray(contact.efc_address)
         dims = np.asarray(contact.dim)

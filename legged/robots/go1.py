@@ -23,4 +23,7 @@ GO1 = RobotSpec(
     imu_site="imu",
     body_box_half_extents=(0.188, 0.047, 0.057),
     standing_height=0.27,
+    # The paper's local planner picks body heights in 0.23-0.31 m; a little crouch below that is held
+    # easily with Kp 20, a stretch above 0.32 m leaves the feet too little reach over bumps.
+    body_height_range=(0.22, 0.32),
 )

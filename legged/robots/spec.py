@@ -44,6 +44,8 @@ class RobotSpec:
     """Half sizes of the trunk box (x, y, z) used by planners and clearance checks, metres."""
     standing_height: float
     """Base height above flat ground at the default pose, metres (measured, see tests)."""
+    body_height_range: tuple[float, float]
+    """Lowest and highest height of the body above the floor under each foot that the legs can hold (planners)."""
 
     @property
     def num_joints(self) -> int:

@@ -1,0 +1,297 @@
+"""Body-pose path planning with OMPL through a confined space (PAPERS.md section 1).
+
+State space: the body pose as a 6-D real vector (x, y, h, roll, pitch, yaw), a reduction of SE(3):
+- h is the body centre's height above the floor beneath it (z = floor(x, y) + h). The legs keep the
+  body within a band about 0.1 m thick above the floor, so sampling z freely would waste nearly every
+  sample; sampling h within the leg-reach band loses no reachable pose.
+- roll and pitch are bounded well inside +-90 degrees, where z-y-x Euler angles are a singularity-free
+  chart of SO(3); yaw spans the start-to-goal heading +-pi, so no angle ever wraps.
+Angles are scaled by `angle_weight` (metres per radian) so that path length, and hence what optimal
+planners minimise, counts a turn as well as a shift. Validity is `BodyChecker` (body box against
+floor and ceiling with roll and pitch, and leg reach).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+from legged.robots import GO1
+from legged.robots.spec import RobotSpec
+from planners.body_check import BodyCheckConfig, BodyChecker
+from planners.maps import HeightMaps
+
+ou.setLogLevel(ou.LOG_ERROR)
+
+PLANNERS = {
+    "rrtconnect": og.RRTConnect,
+    "rrt": og.RRT,
+    "rrtstar": og.RRTstar,
+    "informedrrtstar": og.InformedRRTstar,
+    "bitstar": og.BITstar,
+    "aorrtc": og.AORRTC,
+    "prmstar": og.PRMstar,
+}
+"""OMPL planners by name; all but rrtconnect and rrt are asymptotically optimal and use the whole time limit."""
+
+
+class PlanningError(ValueError):
+    """No plan: the start or goal is invalid or off the map, or no path was found in time. Says which."""
+
+
+def planner_key(name: str) -> str:
+    """Canonical planner name: 'RRT*' -> 'rrtstar', 'BIT*' -> 'bitstar', 'RRTConnect' -> 'rrtconnect'."""
+    key = name.lower().replace("*", "star").replace("-", "").replace("_", "").replace(" ", "")
+    if key not in PLANNERS:
+        raise PlanningError(f"unknown planner {name!r}; choose one of {', '.join(PLANNERS)}")
+    return key
+
+
+@dataclasses.dataclass(frozen=True)
+class PlannerConfig:
+    """Settings of one planning query."""
+
+    planner: str = "rrtconnect"
+    """OMPL planner (see PLANNERS); 'RRT*', 'BIT*', 'AORRTC' style names are accepted."""
+    time_limit: float = 5.0
+    """Seconds the planner may search (optimal planners use all of it)."""
+    seed: int = 0
+    """Seed of OMPL's random sampling; the same seed gives the same path (for planners that stop early)."""
+    simplify: bool = True
+    """Shortcut and smooth the raw path (OMPL's PathSimplifier, bounded and deterministic)."""
+    spacing: float = 0.5
+    """Largest distance between consecutive waypoints, metres (in position and in the scaled state space)."""
+    max_roll: float = math.radians(15.0)
+    """Largest body roll a waypoint may ask for, radians."""
+    max_pitch: float = math.radians(15.0)
+    """Largest body pitch a waypoint may ask for, radians."""
+    angle_weight: float = 0.3
+    """Metres of path length one radian of rotation counts as."""
+    max_step: float = 0.2
+    """Longest edge a tree planner adds in one extension (OMPL's `range`), state-space metres."""
+    check_step: float = 0.02
+    """Largest state-space step between collision checks along a motion, metres."""
+    body: BodyCheckConfig = BodyCheckConfig()
+    """Body-box margin and leg-reach check."""
+
+    def validate(self) -> None:
+        """Raise PlanningError on values that cannot work."""
+        planner_key(self.planner)
+        for name in ("time_limit", "spacing", "angle_weight", "max_step", "check_step"):
+            if getattr(self, name) <= 0:
+                raise PlanningError(f"{name} must be > 0, got {getattr(self, name)}")
+        if not (0 <= self.max_roll < math.pi / 2 and 0 <= self.max_pitch < math.pi / 2):
+            raise PlanningError("max_roll and max_pitch must lie in [0, pi/2)")
+
+
+@dataclasses.dataclass(frozen=True)
+class Plan:
+    """A planned path of body poses."""
+
+    waypoints: np.ndarray
+    """(n, 6) body poses x, y, z, roll, pitch, yaw (body centre, world frame, radians); start and goal included."""
+    length_m: float
+    """Length of the body-centre path, metres."""
+    plan_time_s: float
+    """Time the planner searched (simplification excluded), seconds."""
+    planner: str
+    """Canonical name of the planner used."""
+
+    def to_json(self) -> dict:
+        """The plan as a JSON-friendly dict (waypoints rounded to 0.1 mm / 0.1 mrad)."""
+        return {"waypoints": np.round(self.waypoints, 4).tolist(), "length_m": round(self.length_m, 4),
+                "plan_time_s": round(self.plan_time_s, 4), "planner": self.planner}
+
+
+def as_pose(point, yaw: float) -> np.ndarray:
+    """A 6-D pose from a pose, or from a position x, y, z (then level, heading `yaw`)."""
+    point = np.asarray(point, float)
+    if point.shape == (6,):
+        return point
+    if point.shape != (3,):
+        raise PlanningError(f"expected x, y, z or a 6-D pose, got shape {point.shape}")
+    return np.array([*point, 0.0, 0.0, yaw])
+
+
+def path_length(waypoints: np.ndarray) -> float:
+    """Length of the body-centre polyline, metres."""
+    return float(np.linalg.norm(np.diff(waypoints[:, :3], axis=0), axis=1).sum())
+
+
+class _Space:
+    """Conversions between poses and the scaled (x, y, h, roll, pitch, yaw) OMPL state, plus the space."""
+
+    def __init__(self, maps: HeightMaps, robot: RobotSpec, config: PlannerConfig, heading: float):
+        self.maps, self.heading, self.w = maps, heading, config.angle_weight
+        self.space = ob.RealVectorStateSpace(6)
+        lo_h, hi_h = robot.body_height_range
+        low = [maps.origin[0], maps.origin[1], lo_h - 0.05,
+               -self.w * config.max_roll, -self.w * config.max_pitch, -self.w * math.pi]
+        high = [maps.upper[0], maps.upper[1], hi_h + 0.05,
+                self.w * config.max_roll, self.w * config.max_pitch, self.w * math.pi]
+        bounds = ob.RealVectorBounds(6)
+        for k in range(6):
+            bounds.setLow(k, low[k])
+            bounds.setHigh(k, high[k])
+        self.space.setBounds(bounds)
+        self.low, self.high = np.array(low), np.array(high)
+
+    def to_poses(self, vectors: np.ndarray) -> np.ndarray:
+        """Scaled states (n, 6) -> poses (n, 6)."""
+        v = np.atleast_2d(vectors)
+        yaw = (v[:, 5] / self.w + self.heading + math.pi) % (2 * math.pi) - math.pi
+        z = v[:, 2] + self.maps.lookup(v[:, :2])
+        return np.stack([v[:, 0], v[:, 1], z, v[:, 3] / self.w, v[:, 4] / self.w, yaw], 1)
+
+    def to_vector(self, pose) -> np.ndarray:
+        """One pose (6,) -> scaled state (6,)."""
+        rel_yaw = (pose[5] - self.heading + math.pi) % (2 * math.pi) - math.pi
+        h = pose[2] - float(self.maps.lookup(np.asarray(pose[None, :2], float))[0])
+        return np.array([pose[0], pose[1], h, self.w * pose[3], self.w * pose[4], self.w * rel_yaw])
+
+    def state(self, pose):
+        """An OMPL state holding `pose`."""
+        s = self.space.allocState()
+        for k, v in enumerate(self.to_vector(pose)):
+            s[k] = float(v)
+        return s
+
+
+def _values(state) -> np.ndarray:
+    return np.array([state[k] for k in range(6)])
+
+
+class _BatchMotionValidator(ob.MotionValidator):
+    """Checks all states along a motion in one vectorised call (OMPL's default checks one at a time)."""
+
+    def __init__(self, info, space: _Space, checker: BodyChecker, step: float):
+        super().__init__(info)
+        self.space, self.checker, self.step = space, checker, step
+
+    def checkMotion(self, a, b, *unused) -> bool:  # noqa: N802 (OMPL's name)
+        va, vb = _values(a), _values(b)
+        n = max(int(math.ceil(np.linalg.norm(vb - va) / self.step)), 1)
+        states = va + np.linspace(0.0, 1.0, n + 1)[1:, None] * (vb - va)  # a is valid by OMPL's convention
+        return bool(self.checker.valid(self.space.to_poses(states)).all())
+
+
+def _seed_ompl(seed: int) -> None:
+    """Seed OMPL's global generator (it complains when reseeded in one process, but obeys)."""
+    ou.noOutputHandler()
+    try:
+        ou.RNG.setSeed(int(seed) % (2**31 - 2) + 1)
+    finally:
+        ou.restorePreviousOutputHandler()
+
+
+def _check_endpoint(name: str, pose: np.ndarray, checker: BodyChecker, space: _Space, config: PlannerConfig):
+    if not checker.maps.contains(pose[:2]):
+        raise PlanningError(f"the {name} ({pose[0]:.3f}, {pose[1]:.3f}) lies outside the map "
+                            f"({checker.maps.describe_bounds()})")
+    if abs(pose[3]) > config.max_roll + 1e-9 or abs(pose[4]) > config.max_pitch + 1e-9:
+        raise PlanningError(f"the {name} pose has roll/pitch ({pose[3]:.3f}, {pose[4]:.3f}) beyond the limits "
+                            f"({config.max_roll:.3f}, {config.max_pitch:.3f}) rad")
+    reason = checker.violation(pose)
+    if reason:
+        raise PlanningError(f"the {name} pose {np.round(pose, 3).tolist()} is in collision or unreachable: {reason}")
+    if np.any(space.to_vector(pose) < space.low - 1e-9) or np.any(space.to_vector(pose) > space.high + 1e-9):
+        raise PlanningError(f"the {name} pose {np.round(pose, 3).tolist()} lies outside the planning bounds "
+                            f"{np.round(space.low, 3).tolist()}..{np.round(space.high, 3).tolist()} (x, y, h, angles)")
+
+
+def _subdivide(vertices: np.ndarray, spacing: float, space: _Space) -> np.ndarray:
+    """Poses along a state-space polyline: every segment split into equal parts so that consecutive poses
+    are at most `spacing` apart, both in state space and in body-centre position."""
+    out = [space.to_poses(vertices[:1])]
+    for a, b in zip(vertices[:-1], vertices[1:]):
+        n = max(int(math.ceil(np.linalg.norm(b - a) / spacing - 1e-9)), 1)
+        while True:  # z follows the floor, so positions can be farther apart than states
+            poses = space.to_poses(a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a))
+            if np.linalg.norm(np.diff(poses[:, :3], axis=0), axis=1).max() <= spacing + 1e-9:
+                break
+            n += 1
+        out.append(poses[1:])
+    return np.concatenate(out)
+
+
+def plan_path(maps: HeightMaps, start, goal, robot: RobotSpec = GO1, config: PlannerConfig = PlannerConfig(),
+              checker: BodyChecker | None = None) -> Plan:
+    """Plan body-pose waypoints from start to goal (each x, y, z or a full 6-D pose); raise PlanningError."""
+    config.validate()
+    checker = checker or BodyChecker(maps, robot, config.body)
+    start, goal = np.asarray(start, float), np.asarray(goal, float)
+    heading = math.atan2(goal[1] - start[1], goal[0] - start[0])
+    start_pose, goal_pose = as_pose(start, heading), as_pose(goal, heading)
+    space = _Space(maps, robot, config, heading)
+    _check_endpoint("start", start_pose, checker, space, config)
+    _check_endpoint("goal", goal_pose, checker, space, config)
+
+    _seed_ompl(config.seed)
+    setup = og.SimpleSetup(space.space)
+    setup.setStateValidityChecker(lambda s: bool(checker.valid(space.to_poses(_values(s)))[0]))
+    info = setup.getSpaceInformation()
+    motions = _BatchMotionValidator(info, space, checker, config.check_step)
+    info.setMotionValidator(motions)
+    setup.setStartAndGoalStates(space.state(start_pose), space.state(goal_pose))
+    setup.setOptimizationObjective(ob.PathLengthOptimizationObjective(info))
+    name = planner_key(config.planner)
+    planner = PLANNERS[name](info)
+    if hasattr(planner, "setRange"):
+        planner.setRange(config.max_step)
+    setup.setPlanner(planner)
+    setup.solve(config.time_limit)
+    plan_time = setup.getLastPlanComputationTime()
+    if not setup.haveExactSolutionPath():
+        raise PlanningError(
+            f"no collision-free path from start {np.round(start_pose[:3], 3).tolist()} to goal "
+            f"{np.round(goal_pose[:3], 3).tolist()} found by {name} within {config.time_limit} s "
+            "(the space may be blocked; a longer time limit helps only if it is not)")
+    if config.simplify:
+        setup.simplifySolution(0.0)  # 0 = OMPL's bounded simplifyMax: deterministic
+    path = setup.getSolutionPath()
+    vertices = np.array([[path.getState(i)[k] for k in range(6)] for i in range(path.getStateCount())])
+    vertices[0], vertices[-1] = space.to_vector(start_pose), space.to_vector(goal_pose)
+    waypoints = _subdivide(vertices, config.spacing, space)
+    bad = np.flatnonzero(~checker.valid(waypoints))
+    if bad.size:  # cannot happen if OMPL validated every motion; refuse rather than hand out a colliding path
+        raise PlanningError(f"internal: waypoints {bad.tolist()} of the simplified path fail the body check")
+    return Plan(waypoints=waypoints, length_m=path_length(waypoints), plan_time_s=float(plan_time), planner=name)
+
+
+def nearest_valid_pose(checker: BodyChecker, pose, config: PlannerConfig, search_radius: float = 0.1) -> np.ndarray:
+    """The valid pose closest to a measured one: roll/pitch clipped to the limits (or levelled), the body
+    moved within `search_radius` horizontally and anywhere within leg reach vertically."""
+    pose = np.asarray(pose, float).copy()
+    pose[3] = np.clip(pose[3], -config.max_roll, config.max_roll)
+    pose[4] = np.clip(pose[4], -config.max_pitch, config.max_pitch)
+    if checker.is_valid(pose):
+        return pose
+    shifts = np.arange(-search_radius, search_radius + 1e-9, checker.maps.resolution)
+    lo, hi = checker.height_range
+    floor = float(checker.maps.floor_at(pose[:2]))
+    dx, dy, z, tilt = np.meshgrid(shifts, shifts, floor + np.linspace(lo, hi, 11), [1.0, 0.0], indexing="ij")
+    candidates = np.stack([pose[0] + dx, pose[1] + dy, z, pose[3] * tilt, pose[4] * tilt,
+                           np.full_like(z, pose[5])], -1).reshape(-1, 6)
+    valid = candidates[checker.valid(candidates)]
+    if not len(valid):
+        raise PlanningError(f"no valid body pose within {search_radius} m of the current position "
+                            f"{np.round(pose[:3], 3).tolist()}: {checker.violation(pose)}")
+    turn = np.abs(valid[:, 3:5] - pose[3:5]).sum(1)
+    cost = np.linalg.norm(valid[:, :3] - pose[:3], axis=1) + config.angle_weight * turn
+    return valid[np.argmin(cost)]
+
+
+def replan(maps: HeightMaps, pose, goal, robot: RobotSpec = GO1, config: PlannerConfig = PlannerConfig(),
+           checker: BodyChecker | None = None) -> Plan:
+    """Remaining waypoints from the robot's current pose to the goal (for evaluation between control ticks).
+
+    A measured pose is rarely exactly plannable (the body sways, crouches, tilts), so the path starts at
+    `nearest_valid_pose`. Raises PlanningError if there is none nearby or no path from it.
+    """
+    checker = checker or BodyChecker(maps, robot, config.body)
+    return plan_path(maps, nearest_valid_pose(checker, pose, config), goal, robot, config, checker)

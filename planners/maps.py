@@ -1,0 +1,86 @@
+"""Floor and ceiling height maps as the planner sees them (from a generated world or a sampled scene)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from legged.sensors.heightscan import surface_height
+
+
+@dataclasses.dataclass(frozen=True)
+class HeightMaps:
+    """Two height maps over one grid: the solid floor below and the solid ceiling above the free space."""
+
+    floor: np.ndarray
+    """Floor height z (metres), shape (nx, ny); sample [i, j] lies at origin + (i, j) * resolution."""
+    ceiling: np.ndarray
+    """Ceiling height z, same shape; equal to the floor where the column is solid (a wall)."""
+    resolution: float
+    """Spacing of samples, metres."""
+    origin: np.ndarray
+    """World x, y of sample [0, 0]."""
+    ceiling_anti_diagonal: bool = False
+    """True when the ceiling is an upside-down MuJoCo height field (cells split along the other diagonal)."""
+    source: str = ""
+    """Where the maps came from (for messages)."""
+
+    def __post_init__(self):
+        if self.floor.ndim != 2 or self.floor.shape != self.ceiling.shape:
+            raise ValueError(f"floor {self.floor.shape} and ceiling {self.ceiling.shape} must be equal 2-D arrays")
+        if min(self.floor.shape) < 2:
+            raise ValueError(f"height maps need at least 2 x 2 samples, got {self.floor.shape}")
+        if self.resolution <= 0:
+            raise ValueError(f"resolution must be > 0, got {self.resolution}")
+
+    @classmethod
+    def from_world(cls, world) -> "HeightMaps":
+        """The exact maps of a generated world (or a Terrain): what its MJCF height fields realise."""
+        return cls(floor=np.asarray(world.floor, np.float64), ceiling=np.asarray(world.ceiling, np.float64),
+                   resolution=float(world.resolution), origin=np.asarray(world.origin, np.float64),
+                   ceiling_anti_diagonal=True, source="generated world")
+
+    @property
+    def upper(self) -> np.ndarray:
+        """World x, y of the last sample."""
+        return self.origin + self.resolution * (np.array(self.floor.shape) - 1)
+
+    def contains(self, xy) -> np.ndarray:
+        """Whether world points xy (..., 2) lie on the map."""
+        xy = np.asarray(xy, np.float64)
+        return np.all((xy >= self.origin - 1e-9) & (xy <= self.upper + 1e-9), axis=-1)
+
+    def floor_at(self, xy) -> np.ndarray:
+        """Floor height under world points xy (..., 2), interpolated on the map's triangles."""
+        return surface_height(self.floor, self.origin, self.resolution, np.asarray(xy, np.float64))
+
+    def ceiling_at(self, xy) -> np.ndarray:
+        """Ceiling height above world points xy (..., 2)."""
+        return surface_height(self.ceiling, self.origin, self.resolution, np.asarray(xy, np.float64),
+                              anti_diagonal=self.ceiling_anti_diagonal)
+
+    def lookup(self, xy: np.ndarray, ceiling: bool = False) -> np.ndarray:
+        """Fast `floor_at` / `ceiling_at` for points (n, 2); nan for points off the map."""
+        grid = self.ceiling if ceiling else self.floor
+        nx, ny = grid.shape
+        f = (xy - self.origin) / self.resolution
+        fx, fy = f[:, 0], f[:, 1]
+        off = (fx < -1e-9) | (fy < -1e-9) | (fx > nx - 1 + 1e-9) | (fy > ny - 1 + 1e-9)
+        i = np.clip(fx, 0.0, nx - 2).astype(np.int64)
+        j = np.clip(fy, 0.0, ny - 2).astype(np.int64)
+        u, v = fx - i, fy - j
+        flat, k = grid.ravel(), i * ny + j
+        h00, h10, h01, h11 = flat[k], flat[k + ny], flat[k + 1], flat[k + ny + 1]
+        if ceiling and self.ceiling_anti_diagonal:
+            low = h00 + u * (h10 - h00) + v * (h01 - h00)
+            high = h11 + (1 - u) * (h01 - h11) + (1 - v) * (h10 - h11)
+            out = np.where(u + v <= 1.0, low, high)
+        else:
+            out = np.where(u >= v, h00 + u * (h10 - h00) + v * (h11 - h10), h00 + v * (h01 - h00) + u * (h11 - h01))
+        return np.where(off, np.nan, out)
+
+    def describe_bounds(self) -> str:
+        """The map's x and y ranges as text."""
+        lo, hi = self.origin, self.upper
+        return f"x in [{lo[0]:.2f}, {hi[0]:.2f}], y in [{lo[1]:.2f}, {hi[1]:.2f}]"

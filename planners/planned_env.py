@@ -1,0 +1,42 @@
+"""Confined-space environments whose waypoints come from the planner (what training uses).
+
+The environments never import the planner (DESIGN.md): this module plans the worlds ahead of time,
+tiles the traversable ones into a terrain and hands the paths over as arrays.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from legged.envs import default_config, make
+from legged.envs.confined import ConfinedConfig, ConfinedEnv
+from legged.robots import GO1
+from legged.worlds.terrain import Terrain
+from planners.batch import feasible_worlds
+from planners.body_planner import PlannerConfig
+
+
+def tile_paths(terrain: Terrain, worlds, plans) -> list[np.ndarray]:
+    """Move each world's planned waypoints to where its tile sits in the terrain."""
+    out = []
+    for k, (world, plan) in enumerate(zip(worlds, plans)):
+        path = np.array(plan.waypoints, np.float64)
+        path[:, :2] += terrain.starts[k, :2] - np.asarray(world.start)[:2]
+        out.append(path)
+    return out
+
+
+def make_planned_env(task: str, planner: PlannerConfig = PlannerConfig(), cache_dir=None, workers: int = 1,
+                     progress: bool = True, config=None, **overrides):
+    """Build `task`; confined tasks get traversable worlds and planned waypoints, others are built as is."""
+    config = config or default_config(task)
+    if overrides:
+        config = dataclasses.replace(config, **overrides)
+    if not isinstance(config, ConfinedConfig):
+        return make(task, config)
+    worlds, plans = feasible_worlds(config.num_worlds, config.world_seed, config.difficulties, config.world, GO1,
+                                    planner, cache_dir, workers, progress=progress)
+    terrain = Terrain.from_worlds(worlds)
+    return ConfinedEnv(config, GO1, terrain, tile_paths(terrain, worlds, plans))
