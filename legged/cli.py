@@ -141,6 +141,56 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def cmd_train(args) -> int:
+    from policies.training import resume_run, start_run
+
+    if args.resume:
+        if args.task:
+            raise ValueError("--resume DIR continues a run with its own config; do not name a task")
+        record = resume_run(args.resume, progress=not args.quiet)
+    else:
+        if not args.task:
+            raise ValueError("name a task (see `legged tasks`) or continue a run with --resume DIR")
+        record = start_run(args.task, args.run_dir, backend=args.backend, num_envs=args.num_envs,
+                           timesteps=args.timesteps, seed=args.seed, overrides=args.set, progress=not args.quiet)
+    print(json.dumps(record))
+    return 0
+
+
+def cmd_eval(args) -> int:
+    from legged.envs.confined import ConfinedConfig
+    from policies.evaluate import evaluate_mjx, evaluate_native, held_out, summarize
+    from policies.policy_io import load_policy
+    from policies.training import build_env
+    import dataclasses
+
+    if args.episodes < 1:
+        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
+    policy, config = load_policy(args.run_dir, args.checkpoint)
+    env = build_env(dataclasses.replace(config, env=held_out(config.env)))
+    if env.observation_size["state"] != policy.obs_size and env.observation_size["state"] != (policy.obs_size,):
+        raise ValueError(f"checkpoint {policy.checkpoint} expects {policy.obs_size} observations; "
+                         f"the task gives {env.observation_size['state']}")
+    runner = evaluate_native if args.native else evaluate_mjx
+    finals = runner(env, policy, args.episodes, args.seed, progress=not args.quiet)
+    report = dict(summarize(finals, isinstance(config.env, ConfinedConfig)), physics="native" if args.native else "mjx",
+                  checkpoint=str(policy.checkpoint), trained_steps=policy.step, task=config.task)
+    print(json.dumps(report) if args.json else json.dumps(report, indent=2))
+    return 0
+
+
+def cmd_export(args) -> int:
+    from policies.export import export_onnx
+    from policies.policy_io import load_policy
+
+    if not args.onnx:
+        raise ValueError("choose a format: --onnx")
+    policy, _ = load_policy(args.run_dir, args.checkpoint)
+    report = export_onnx(policy, args.out or f"{args.run_dir}/policy.onnx")
+    print(json.dumps(report))
+    return 0
+
+
 def cmd_tasks(args) -> int:
     from legged.envs import TASKS
 
@@ -198,6 +248,37 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--json", action="store_true",
                     help="print one JSON object: waypoints [x, y, z, roll, pitch, yaw], length_m, plan_time_s, planner")
     pl.set_defaults(fn=cmd_plan)
+
+    tr = sub.add_parser("train", help="train a policy (Brax PPO or rsl-rl PPO) into a run directory")
+    tr.add_argument("task", nargs="?", help="task name (legged tasks)")
+    tr.add_argument("--backend", choices=["rsl", "brax"], default="rsl")
+    tr.add_argument("--num-envs", type=int, default=256)
+    tr.add_argument("--timesteps", type=int, default=1_000_000, help="environment steps, all envs together")
+    tr.add_argument("--seed", type=int, default=0)
+    tr.add_argument("--run-dir", default=None, help="where the run is written (default runs/<task>-<time>)")
+    tr.add_argument("--set", action="append", default=[], metavar="PATH=VALUE",
+                    help="override any config field, e.g. ppo.learning_rate=3e-4, env.episode_seconds=10, "
+                         "checkpoint_every=5, device=cuda (repeatable; see config.yaml of a run for all fields)")
+    tr.add_argument("--resume", default=None, metavar="DIR", help="continue the run in DIR from its last checkpoint")
+    tr.add_argument("--quiet", action="store_true", help="no progress bar")
+    tr.set_defaults(fn=cmd_train)
+
+    ev = sub.add_parser("eval", help="evaluate a run's policy on held-out worlds (MJX or native MuJoCo)")
+    ev.add_argument("run_dir")
+    ev.add_argument("--checkpoint", default=None, help="a checkpoint file (default: the run's newest)")
+    ev.add_argument("--episodes", type=int, default=32)
+    ev.add_argument("--seed", type=int, default=12345, help="seed of the evaluation episodes")
+    ev.add_argument("--native", action="store_true", help="native MuJoCo physics (sim-to-sim) instead of MJX")
+    ev.add_argument("--json", action="store_true", help="one-line JSON")
+    ev.add_argument("--quiet", action="store_true", help="no progress bar")
+    ev.set_defaults(fn=cmd_eval)
+
+    ex = sub.add_parser("export", help="export a run's policy (ONNX) and check it against the framework")
+    ex.add_argument("run_dir")
+    ex.add_argument("--onnx", action="store_true", help="write an ONNX model")
+    ex.add_argument("--checkpoint", default=None, help="a checkpoint file (default: the run's newest)")
+    ex.add_argument("--out", default=None, help="output file (default RUN_DIR/policy.onnx)")
+    ex.set_defaults(fn=cmd_export)
 
     t = sub.add_parser("tasks", help="list the registered tasks")
     t.set_defaults(fn=cmd_tasks)

@@ -1,0 +1,171 @@
+"""Training with Brax PPO (all in JAX, on every local device through pmap) into a run directory.
+
+Brax's own AutoResetWrapper rewinds a finished environment to its first physics state and observation but
+keeps the rest of its `info` (our step counter, last action, world tile, randomisation), so after the
+first time-out every episode would end after one step. `FullResetWrapper` resets finished environments
+completely instead (a fresh `reset` with a new key), keeping only the episode bookkeeping of Brax's
+EpisodeWrapper for the transition that ended.
+
+Resume: Brax's `ppo.train` accepts the normaliser, policy and value parameters to start from but not the
+optimiser state, so a resumed Brax run continues from the last parameters and step count with fresh Adam
+moments (the rsl backend restores the optimiser too).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import pickle
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from brax.envs.wrappers.training import EpisodeWrapper, VmapWrapper
+from brax.envs.base import Wrapper
+from brax.training.agents.ppo import networks as ppo_networks
+from brax.training.agents.ppo import train as brax_ppo
+from tqdm import tqdm
+
+from policies.config import ConfigError, TrainConfig
+from policies.run_dir import RunDir, RunDirError
+
+
+def check_devices(config: TrainConfig) -> None:
+    """Brax PPO splits the environments over the local devices: the count must divide evenly."""
+    devices = jax.local_device_count()
+    if config.num_envs % devices:
+        raise ConfigError(f"num_envs {config.num_envs} is not divisible by the {devices} local JAX devices")
+    if config.num_envs % config.ppo.num_mini_batches:
+        raise ConfigError(f"num_envs {config.num_envs} must be divisible by ppo.num_mini_batches "
+                          f"{config.ppo.num_mini_batches} for Brax PPO")
+
+
+_EPISODE_KEYS = ("episode_metrics", "episode_done", "truncation")
+"""Info entries of Brax's EpisodeWrapper that describe the transition that just ended: kept on reset."""
+
+
+class FullResetWrapper(Wrapper):
+    """Batched auto-reset that calls the environment's own reset for finished environments."""
+
+    def reset(self, rng):
+        state = self.env.reset(rng)
+        state.info["reset_key"] = jax.vmap(lambda k: jax.random.fold_in(k, 1))(rng)
+        return state
+
+    def step(self, state, action):
+        state = self.env.step(state, action)
+        split = jax.vmap(jax.random.split)(state.info["reset_key"])
+        done = state.done > 0
+
+        def fresh():
+            new = self.env.reset(split[:, 0])
+            return new.replace(info={**new.info, **{k: state.info[k] for k in _EPISODE_KEYS},
+                                     "reset_key": split[:, 1]})
+
+        def pick(a, b):
+            return jnp.where(done.reshape(done.shape + (1,) * (a.ndim - 1)), a, b)
+
+        kept = state.replace(info={**state.info, "reset_key": split[:, 1]})
+        new = jax.lax.cond(done.any(), fresh, lambda: kept)
+        merged = jax.tree_util.tree_map(pick, new.replace(done=state.done, reward=state.reward,
+                                                          metrics=state.metrics), kept)
+        return merged
+
+
+def wrap_for_training(env, episode_length: int, action_repeat: int, randomization_fn=None):
+    """Brax PPO's `wrap_env_fn`: episode bookkeeping, vmap, and full resets (see module docstring)."""
+    if randomization_fn is not None:
+        raise ConfigError("Brax's randomization_fn is not used: the environments randomise themselves")
+    return FullResetWrapper(VmapWrapper(EpisodeWrapper(env, episode_length, action_repeat)))
+
+
+def network_factory(config: TrainConfig):
+    """Brax PPO networks: the policy reads `state`, the value function `privileged_state`."""
+    return functools.partial(
+        ppo_networks.make_ppo_networks, policy_hidden_layer_sizes=tuple(config.ppo.actor_hidden),
+        value_hidden_layer_sizes=tuple(config.ppo.critic_hidden), policy_obs_key="state",
+        value_obs_key="privileged_state")
+
+
+def load_checkpoint(path) -> dict:
+    """A Brax checkpoint of this project; RunDirError naming the file if damaged."""
+    try:
+        with open(path, "rb") as f:
+            payload = pickle.load(f)
+    except Exception as exc:
+        raise RunDirError(f"checkpoint {path} cannot be read: {exc}") from None
+    if not isinstance(payload, dict) or payload.get("backend") != "brax":
+        raise RunDirError(f"{path} is not a Brax checkpoint of this project")
+    return payload
+
+
+def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, progress: bool = True) -> dict:
+    """Train (or continue) `env` with Brax PPO; returns the last metrics record."""
+    ppo = config.ppo
+    obs_sizes = {k: int(v[0]) if isinstance(v, tuple) else int(v) for k, v in env.observation_size.items()}
+    start_step, restore = 0, None
+    if resume:
+        path = run.latest_checkpoint()
+        payload = load_checkpoint(path)
+        if payload["obs_sizes"] != obs_sizes or payload["num_actions"] != env.action_size:
+            raise RunDirError(f"checkpoint {path} expects observations {payload['obs_sizes']}; the environment "
+                              f"gives {obs_sizes}")
+        start_step, restore = payload["step"], payload["params"]
+    per_iteration = config.num_envs * ppo.num_steps_per_env
+    per_report = per_iteration * config.checkpoint_every
+    remaining = max(config.timesteps - start_step, per_iteration)
+    reports = max(math.ceil(remaining / per_report), 1)
+    bar = tqdm(total=config.timesteps, initial=start_step, unit="step", unit_scale=True,
+               desc=f"{config.task} brax", disable=not progress)
+    last = {"time": time.perf_counter(), "step": 0, "record": {}}
+
+    def on_progress(step, metrics):
+        # Brax calls this with episode statistics (its metrics logger) and, after every epoch, with
+        # training losses; one record per episode report, carrying the latest losses.
+        if step == 0:
+            return
+        if "episode/sum_reward" not in metrics:
+            last["losses"] = {k.replace("training/", "loss_"): _get(metrics, k) for k in metrics
+                              if k.startswith("training/") and "loss" in k}
+            return
+        now = time.perf_counter()
+        record = {"step": start_step + int(step), "episode_return": _get(metrics, "episode/sum_reward"),
+                  "episode_length": _get(metrics, "episode/length"), "steps_per_s": (step - last["step"]) / max(now - last["time"], 1e-9)}
+        record.update({f"episode_{k[8:].replace('/', '_')}": _get(metrics, k) for k in metrics
+                       if k.startswith("episode/reward/") or k[8:] in ("success", "fell", "collisions")})
+        record.update(last.get("losses", {}))
+        run.log(record)
+        bar.update(record["step"] - bar.n)
+        bar.set_postfix(ret="-" if record["episode_return"] is None else f"{record['episode_return']:.2f}",
+                        sps=f"{record['steps_per_s']:.0f}")
+        last.update(time=now, step=step, record=record)
+
+    def on_params(step, make_policy, params):
+        if step == 0:
+            return
+        payload = {"backend": "brax", "step": start_step + int(step), "params": jax.device_get(params),
+                   "obs_sizes": obs_sizes, "num_actions": env.action_size, "config": config.task}
+        run.write_checkpoint(start_step + int(step), "pkl", pickle.dumps(payload))
+
+    try:
+        brax_ppo.train(
+            environment=env, num_timesteps=remaining, num_envs=config.num_envs,
+            episode_length=env.config.episode_steps, unroll_length=ppo.num_steps_per_env,
+            batch_size=config.num_envs // ppo.num_mini_batches, num_minibatches=ppo.num_mini_batches,
+            num_updates_per_batch=ppo.num_learning_epochs, learning_rate=ppo.learning_rate,
+            learning_rate_schedule="ADAPTIVE_KL", desired_kl=ppo.desired_kl, entropy_cost=ppo.entropy_coef,
+            discounting=ppo.gamma, gae_lambda=ppo.lam,
+            clipping_epsilon=ppo.clip_param, max_grad_norm=ppo.max_grad_norm, normalize_observations=True,
+            network_factory=network_factory(config), seed=config.seed + start_step, num_evals=reports + 1,
+            run_evals=False, log_training_metrics=True, progress_fn=on_progress, policy_params_fn=on_params,
+            wrap_env_fn=wrap_for_training,
+            restore_params=restore, restore_value_fn=True)
+    finally:
+        bar.close()
+    return last["record"]
+
+
+def _get(metrics: dict, key: str):
+    value = metrics.get(key)
+    return None if value is None else float(np.asarray(value))

@@ -1,0 +1,171 @@
+"""Training configuration: frozen dataclasses, YAML round trip and `--set path.to.field=value` overrides."""
+
+from __future__ import annotations
+
+import dataclasses
+import types
+import typing
+from typing import Any, Literal
+
+import yaml
+
+from legged.envs import default_config
+
+
+class ConfigError(ValueError):
+    """A configuration value or override is unusable; the message names the field."""
+
+
+@dataclasses.dataclass(frozen=True)
+class PPOConfig:
+    """PPO hyper-parameters (PAPERS.md section 1 defaults), shared by both backends where they apply."""
+
+    learning_rate: float = 1e-3
+    """Adam step size (adapted by the KL schedule in rsl-rl)."""
+    num_steps_per_env: int = 24
+    """Rollout length per environment per iteration."""
+    num_learning_epochs: int = 5
+    """Passes over each rollout."""
+    num_mini_batches: int = 4
+    """Mini-batches per pass."""
+    clip_param: float = 0.2
+    """PPO ratio clip."""
+    gamma: float = 0.99
+    """Discount."""
+    lam: float = 0.95
+    """GAE lambda."""
+    entropy_coef: float = 0.01
+    """Entropy bonus weight."""
+    value_loss_coef: float = 1.0
+    """Value-loss weight."""
+    desired_kl: float = 0.01
+    """Target KL of the adaptive learning-rate schedule."""
+    max_grad_norm: float = 1.0
+    """Gradient clipping norm."""
+    actor_hidden: tuple[int, ...] = (512, 256, 128)
+    """Actor MLP layer sizes (reads `state`)."""
+    critic_hidden: tuple[int, ...] = (512, 256, 128)
+    """Critic MLP layer sizes (reads `privileged_state`)."""
+    activation: str = "elu"
+    """Hidden activation."""
+    init_noise_std: float = 1.0
+    """Initial standard deviation of the Gaussian policy."""
+    obs_normalization: bool = True
+    """Running mean/std normalisation of observations (rsl-rl backend; Brax PPO always normalises)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class TrainConfig:
+    """One training run."""
+
+    task: str
+    """Registered task name (`legged tasks`)."""
+    backend: Literal["rsl", "brax"] = "rsl"
+    """rsl: rsl-rl PPO in PyTorch; brax: Brax PPO in JAX."""
+    num_envs: int = 256
+    """Parallel environments."""
+    timesteps: int = 1_000_000
+    """Environment steps to train for (all environments together)."""
+    seed: int = 0
+    """Seed of environments and networks."""
+    checkpoint_every: int = 10
+    """Iterations between checkpoints (the last one is always written)."""
+    device: str = "cpu"
+    """PyTorch device of the rsl backend (cpu, cuda, cuda:1, ...)."""
+    ppo: PPOConfig = PPOConfig()
+    """PPO hyper-parameters."""
+    env: Any = None
+    """The task's environment config (filled in from the task's defaults)."""
+
+    def resolved(self) -> "TrainConfig":
+        """This config with the task's default env config filled in and values checked."""
+        cfg = self if self.env is not None else dataclasses.replace(self, env=default_config(self.task))
+        if cfg.backend not in ("rsl", "brax"):
+            raise ConfigError(f"backend must be 'rsl' or 'brax', got {cfg.backend!r}")
+        for name in ("num_envs", "timesteps", "checkpoint_every"):
+            if getattr(cfg, name) < 1:
+                raise ConfigError(f"{name} must be >= 1, got {getattr(cfg, name)}")
+        if cfg.num_envs * cfg.ppo.num_steps_per_env % cfg.ppo.num_mini_batches:
+            raise ConfigError(f"num_envs x num_steps_per_env ({cfg.num_envs} x {cfg.ppo.num_steps_per_env}) must "
+                              f"divide into num_mini_batches ({cfg.ppo.num_mini_batches})")
+        return cfg
+
+
+def to_dict(obj) -> dict:
+    """A (nested) dataclass as plain dicts and lists, for YAML."""
+    def plain(v):
+        if dataclasses.is_dataclass(v):
+            return {f.name: plain(getattr(v, f.name)) for f in dataclasses.fields(v)}
+        if isinstance(v, (tuple, list)):
+            return [plain(x) for x in v]
+        return v
+    return plain(obj)
+
+
+def _convert(kind, value, path: str):
+    """`value` (from YAML or the command line) as the annotated type `kind`."""
+    origin = typing.get_origin(kind)
+    if dataclasses.is_dataclass(kind):
+        if not isinstance(value, dict):
+            raise ConfigError(f"{path}: expected a mapping for {kind.__name__}, got {value!r}")
+        return from_dict(kind, value, path)
+    if origin is tuple:
+        item = typing.get_args(kind)[0]
+        return tuple(_convert(item, v, path) for v in value)
+    if origin is Literal:
+        if value not in typing.get_args(kind):
+            raise ConfigError(f"{path}: must be one of {typing.get_args(kind)}, got {value!r}")
+        return value
+    if origin in (typing.Union, types.UnionType):
+        for option in typing.get_args(kind):
+            if option is not type(None):
+                return _convert(option, value, path)
+    if kind is bool:
+        if isinstance(value, str):
+            if value.lower() not in ("true", "false", "1", "0"):
+                raise ConfigError(f"{path}: expected true or false, got {value!r}")
+            return value.lower() in ("true", "1")
+        return bool(value)
+    if kind in (int, float, str):
+        try:
+            return kind(value)
+        except (TypeError, ValueError):
+            raise ConfigError(f"{path}: expected {kind.__name__}, got {value!r}") from None
+    return value
+
+
+def from_dict(cls, data: dict, path: str = ""):
+    """Rebuild a (nested) frozen dataclass from `to_dict` output; unknown keys are errors."""
+    hints = typing.get_type_hints(cls)
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = set(data) - names
+    if unknown:
+        raise ConfigError(f"unknown config field(s) {sorted(unknown)} in {path or cls.__name__}")
+    return cls(**{k: _convert(hints[k], v, f"{path}{k}") for k, v in data.items()})
+
+
+def apply_overrides(config: TrainConfig, overrides: list[str]) -> TrainConfig:
+    """Apply `a.b.c=value` overrides (e.g. `ppo.learning_rate=3e-4`, `env.episode_seconds=10`)."""
+    data = to_dict(config)
+    for item in overrides:
+        if "=" not in item:
+            raise ConfigError(f"override {item!r} must look like path.to.field=value")
+        path, text = item.split("=", 1)
+        node, keys = data, path.split(".")
+        for key in keys[:-1]:
+            if not isinstance(node.get(key), dict):
+                raise ConfigError(f"override {item!r}: {key!r} is not a config section")
+            node = node[key]
+        if keys[-1] not in node:
+            raise ConfigError(f"override {item!r}: no field {keys[-1]!r} (fields: {', '.join(sorted(node))})")
+        node[keys[-1]] = yaml.safe_load(text) if text else text
+    return load_config(data)
+
+
+def load_config(data: dict) -> TrainConfig:
+    """TrainConfig from its `to_dict` form (as stored in a run's config.yaml)."""
+    data = dict(data)
+    env = data.pop("env", None)
+    cfg = from_dict(TrainConfig, data)
+    env_cls = type(default_config(cfg.task))
+    return dataclasses.replace(cfg, env=from_dict(env_cls, env, "env.") if env is not None else None).resolved()

@@ -1,0 +1,69 @@
+"""`legged export RUN --onnx`: the deterministic actor as ONNX, checked against the framework's own output."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from policies.policy_io import Policy
+
+PARITY_ATOL = 1e-4
+"""Largest action difference allowed between the ONNX model and the framework policy."""
+
+
+class BraxActor(torch.nn.Module):
+    """Brax PPO's deterministic policy in torch: normalise, MLP (swish), tanh of the mean."""
+
+    def __init__(self, normalizer, policy_params, num_actions: int):
+        super().__init__()
+        self.register_buffer("mean", torch.as_tensor(np.asarray(normalizer.mean["state"]), dtype=torch.float32))
+        self.register_buffer("std", torch.as_tensor(np.asarray(normalizer.std["state"]), dtype=torch.float32))
+        layers = policy_params["params"]
+        self.linears = torch.nn.ModuleList()
+        for k in range(sum(name.startswith("hidden_") for name in layers)):
+            w, b = np.asarray(layers[f"hidden_{k}"]["kernel"]), np.asarray(layers[f"hidden_{k}"]["bias"])
+            linear = torch.nn.Linear(w.shape[0], w.shape[1])
+            linear.weight.data = torch.as_tensor(w.T.copy())
+            linear.bias.data = torch.as_tensor(b.copy())
+            self.linears.append(linear)
+        self.num_actions = num_actions
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        x = (obs - self.mean) / self.std
+        for k, linear in enumerate(self.linears):
+            x = linear(x)
+            if k < len(self.linears) - 1:
+                x = x * torch.sigmoid(x)  # swish, Brax's default activation
+        return torch.tanh(x[..., : self.num_actions])
+
+
+def actor_module(policy: Policy) -> torch.nn.Module:
+    """The policy as a torch module mapping actor observations to actions."""
+    if policy.backend == "rsl":
+        return policy.torch_module
+    return BraxActor(*policy.brax_params, policy.num_actions).eval()
+
+
+def export_onnx(policy: Policy, path: str | Path, samples: int = 64, seed: int = 0) -> dict:
+    """Write the ONNX model and compare it with the policy on random observations; returns the check."""
+    import onnxruntime
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    module = actor_module(policy)
+    tmp = path.with_name(f".{path.name}.tmp")
+    torch.onnx.export(module, (torch.zeros(1, policy.obs_size),), str(tmp), input_names=["obs"],
+                      output_names=["actions"], dynamic_axes={"obs": {0: "batch"}, "actions": {0: "batch"}},
+                      opset_version=18, dynamo=False)
+    tmp.replace(path)
+    obs = np.random.default_rng(seed).normal(size=(samples, policy.obs_size)).astype(np.float32)
+    session = onnxruntime.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+    onnx_actions = session.run(["actions"], {"obs": obs})[0]
+    gap = float(np.abs(onnx_actions - policy.act(obs)).max())
+    if not gap <= PARITY_ATOL:
+        raise RuntimeError(f"ONNX export of {policy.checkpoint} differs from the policy by {gap:.2e} "
+                           f"(allowed {PARITY_ATOL:.0e})")
+    return {"onnx": str(path), "checkpoint": str(policy.checkpoint), "backend": policy.backend,
+            "obs_size": policy.obs_size, "num_actions": policy.num_actions, "max_abs_diff": gap, "samples": samples}

@@ -1,0 +1,86 @@
+"""Trained policies from checkpoints, for either backend, as one deterministic `act(state) -> action`."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Callable
+
+import jax
+import numpy as np
+import torch
+
+from policies.config import TrainConfig
+from policies.run_dir import RunDir, RunDirError
+
+
+@dataclasses.dataclass
+class Policy:
+    """A deterministic policy: actor observations (n, obs) -> actions (n, actions), numpy in and out."""
+
+    act: Callable[[np.ndarray], np.ndarray]
+    """The policy function."""
+    backend: str
+    """'rsl' or 'brax'."""
+    step: int
+    """Environment steps the checkpoint was trained for."""
+    obs_size: int
+    """Size of the actor's observation (`state`)."""
+    num_actions: int
+    """Size of the action."""
+    checkpoint: Path
+    """File it was loaded from."""
+    torch_module: torch.nn.Module | None = None
+    """rsl: the deterministic actor (obs -> action) as a torch module, for export."""
+    brax_params: tuple | None = None
+    """brax: (normaliser, policy) parameters, for export."""
+
+
+def _rsl_policy(config: TrainConfig, path: Path) -> Policy:
+    from policies.rsl_backend import build_ppo, dummy_observations, load_checkpoint
+
+    payload = load_checkpoint(path)
+    alg = build_ppo(dummy_observations(payload["obs_sizes"]), 1, payload["num_actions"], config.ppo, "cpu")
+    alg.load(payload["alg"], {"actor": True}, strict=True)
+    module = alg.get_policy().as_onnx(verbose=False).eval()
+
+    def act(obs: np.ndarray) -> np.ndarray:
+        with torch.inference_mode():
+            return module(torch.as_tensor(np.asarray(obs, np.float32))).numpy()
+
+    return Policy(act=act, backend="rsl", step=payload["step"], obs_size=payload["obs_sizes"]["state"],
+                  num_actions=payload["num_actions"], checkpoint=path, torch_module=module)
+
+
+def _brax_policy(config: TrainConfig, path: Path) -> Policy:
+    from brax.training.acme import running_statistics
+    from brax.training.agents.ppo import networks as ppo_networks
+
+    from policies.brax_backend import load_checkpoint, network_factory
+
+    payload = load_checkpoint(path)
+    sizes = payload["obs_sizes"]
+    networks = network_factory(config)(sizes, payload["num_actions"],
+                                       preprocess_observations_fn=running_statistics.normalize)
+    params = payload["params"]
+    inference = jax.jit(ppo_networks.make_inference_fn(networks)((params[0], params[1]), deterministic=True))
+    key = jax.random.PRNGKey(0)
+
+    def act(obs: np.ndarray) -> np.ndarray:
+        obs = np.asarray(obs, np.float32)
+        full = {"state": obs, "privileged_state": np.zeros((len(obs), sizes["privileged_state"]), np.float32)}
+        return np.asarray(inference(full, key)[0])
+
+    return Policy(act=act, backend="brax", step=payload["step"], obs_size=sizes["state"],
+                  num_actions=payload["num_actions"], checkpoint=path, brax_params=(params[0], params[1]))
+
+
+def load_policy(run_dir: str | Path, checkpoint: str | Path | None = None) -> tuple[Policy, TrainConfig]:
+    """The policy of a run (its newest checkpoint unless one is named) and the run's config."""
+    run = RunDir(run_dir)
+    config = run.load_config()
+    path = Path(checkpoint) if checkpoint else run.latest_checkpoint()
+    if not path.is_file():
+        raise RunDirError(f"checkpoint not found: {path}")
+    loader = _rsl_policy if config.backend == "rsl" else _brax_policy
+    return loader(config, path), config

@@ -1,0 +1,175 @@
+"""Training with rsl-rl's PPO (PyTorch) on the MJX environments, with run directories and resume."""
+
+from __future__ import annotations
+
+import io
+import math
+import time
+from pathlib import Path
+
+import jax
+import torch
+from rsl_rl.algorithms import PPO
+from tensordict import TensorDict
+from tqdm import tqdm
+
+from legged.envs.vector import VectorEnv
+from policies.config import PPOConfig, TrainConfig
+from policies.rsl_vecenv import OBS_GROUPS, RslVecEnv
+from policies.run_dir import RunDir, RunDirError
+
+
+def rsl_config(ppo: PPOConfig) -> dict:
+    """rsl-rl's train_cfg for PPO with an MLP actor on `state` and an MLP critic on `privileged_state`."""
+    def model(hidden, stochastic):
+        cfg = {"class_name": "MLPModel", "hidden_dims": list(hidden), "activation": ppo.activation,
+               "obs_normalization": ppo.obs_normalization}
+        if stochastic:
+            cfg["distribution_cfg"] = {"class_name": "GaussianDistribution", "init_std": ppo.init_noise_std}
+        return cfg
+    return {
+        "algorithm": {"class_name": "PPO", "learning_rate": ppo.learning_rate, "num_learning_epochs":
+                      ppo.num_learning_epochs, "num_mini_batches": ppo.num_mini_batches, "clip_param":
+                      ppo.clip_param, "gamma": ppo.gamma, "lam": ppo.lam, "entropy_coef": ppo.entropy_coef,
+                      "value_loss_coef": ppo.value_loss_coef, "desired_kl": ppo.desired_kl,
+                      "max_grad_norm": ppo.max_grad_norm, "schedule": "adaptive"},
+        "actor": model(ppo.actor_hidden, True),
+        "critic": model(ppo.critic_hidden, False),
+        "obs_groups": dict(OBS_GROUPS),
+        "num_steps_per_env": ppo.num_steps_per_env,
+        "multi_gpu": None,
+    }
+
+
+def dummy_observations(obs_sizes: dict, num_envs: int = 1) -> TensorDict:
+    """Zero observations of the given sizes (to build networks without an environment)."""
+    return TensorDict({k: torch.zeros(num_envs, n) for k, n in obs_sizes.items()}, batch_size=[num_envs])
+
+
+class _Shapes:
+    """The little of a VecEnv that building the algorithm needs."""
+
+    def __init__(self, num_envs: int, num_actions: int):
+        self.num_envs, self.num_actions = num_envs, num_actions
+
+
+def build_ppo(obs: TensorDict, num_envs: int, num_actions: int, ppo: PPOConfig, device: str) -> PPO:
+    """rsl-rl PPO with its actor, critic and rollout storage."""
+    import contextlib
+
+    with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints the whole network
+        return PPO.construct_algorithm(obs, _Shapes(num_envs, num_actions), rsl_config(ppo), device)
+
+
+def load_checkpoint(path: Path) -> dict:
+    """A checkpoint written by `train_rsl`; RunDirError naming the file if it is damaged or foreign."""
+    try:
+        payload = torch.load(path, map_location="cpu", weights_only=False)
+    except Exception as exc:
+        raise RunDirError(f"checkpoint {path} cannot be read: {exc}") from None
+    if not isinstance(payload, dict) or payload.get("backend") != "rsl":
+        raise RunDirError(f"{path} is not an rsl-rl checkpoint of this project")
+    return payload
+
+
+def check_compatible(payload: dict, obs_sizes: dict, num_actions: int, path: Path) -> None:
+    """Refuse a checkpoint whose observation or action sizes differ from the environment's."""
+    if payload["obs_sizes"] != obs_sizes or payload["num_actions"] != num_actions:
+        raise RunDirError(f"checkpoint {path} expects observations {payload['obs_sizes']} and "
+                          f"{payload['num_actions']} actions; the environment gives {obs_sizes} and {num_actions}")
+
+
+class EpisodeStats:
+    """Sums of the statistics of finished episodes between two reports."""
+
+    def __init__(self):
+        self.count, self.sums = 0, {}
+
+    def add(self, result) -> None:
+        n = int(result.done.sum())
+        if n:
+            self.count += n
+            for k, v in result.finished.items():
+                self.sums[k] = self.sums.get(k, 0.0) + float(v.sum())
+
+    def means(self) -> dict:
+        """{'episode_<stat>': mean} over the episodes since the last call, then reset."""
+        out = {"episodes": self.count}
+        for k, total in self.sums.items():
+            out[f"episode_{k.replace('/', '_')}"] = total / self.count
+        self.count, self.sums = 0, {}
+        return out
+
+
+def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progress: bool = True) -> dict:
+    """Train (or continue training) `env` with rsl-rl PPO; returns the last metrics record."""
+    ppo = config.ppo
+    per_iteration = config.num_envs * ppo.num_steps_per_env
+    iterations = math.ceil(config.timesteps / per_iteration)
+    payload, iteration, step = None, 0, 0
+    obs_sizes = {k: int(v[0]) if isinstance(v, tuple) else int(v) for k, v in env.observation_size.items()}
+    if resume:
+        path = run.latest_checkpoint()
+        payload = load_checkpoint(path)
+        check_compatible(payload, obs_sizes, env.action_size, path)
+        iteration, step = payload["iteration"], payload["step"]
+    torch.manual_seed(config.seed)
+    vector = VectorEnv.of(env, config.num_envs)
+    venv = RslVecEnv(vector, seed=int(jax.random.randint(jax.random.fold_in(jax.random.PRNGKey(config.seed),
+                                                                            iteration), (), 0, 2**30)),
+                     device=config.device)
+    alg = build_ppo(venv.get_observations(), config.num_envs, env.action_size, ppo, config.device)
+    if payload is not None:
+        alg.load(payload["alg"], None, strict=True)
+        torch.set_rng_state(payload["torch_rng"])
+    from torch.utils.tensorboard import SummaryWriter
+
+    writer = SummaryWriter(str(run.path / "tb"))
+    stats, record = EpisodeStats(), {}
+    bar = tqdm(total=iterations * per_iteration, initial=step, unit="step", unit_scale=True,
+               desc=f"{config.task} rsl", disable=not progress)
+    obs = venv.get_observations()
+    alg.train_mode()
+    try:
+        while iteration < iterations:
+            t0 = time.perf_counter()
+            reward_sum = 0.0
+            with torch.inference_mode():
+                for _ in range(ppo.num_steps_per_env):
+                    actions = alg.act(obs)
+                    obs, rewards, dones, extras = venv.step(actions)
+                    alg.process_env_step(obs, rewards, dones, extras)
+                    stats.add(venv.last_result)
+                    reward_sum += float(rewards.mean())
+                alg.compute_returns(obs)
+            losses = alg.update()
+            iteration += 1
+            step += per_iteration
+            elapsed = time.perf_counter() - t0
+            record = {"step": step, "iteration": iteration, "episode_return": None, "episode_length": None,
+                      **stats.means(),
+                      "reward_per_step": reward_sum / ppo.num_steps_per_env, "steps_per_s": per_iteration / elapsed,
+                      "learning_rate": alg.learning_rate,
+                      "action_std": float(alg.get_policy().output_std.detach().mean()),
+                      **{f"loss_{k}": float(v) for k, v in losses.items()}}
+            run.log(record, writer)
+            bar.update(per_iteration)
+            bar.set_postfix(ret=_short(record["episode_return"]), sps=f"{record['steps_per_s']:.0f}")
+            if iteration % config.checkpoint_every == 0 or iteration == iterations:
+                save_checkpoint(run, alg, iteration, step, obs_sizes, env.action_size)
+    finally:
+        bar.close()
+        writer.close()
+    return record
+
+
+def _short(value) -> str:
+    return "-" if value is None else f"{value:.2f}"
+
+
+def save_checkpoint(run: RunDir, alg: PPO, iteration: int, step: int, obs_sizes: dict, num_actions: int) -> Path:
+    """Model, optimiser, counters and RNG state, written atomically."""
+    buffer = io.BytesIO()
+    torch.save({"backend": "rsl", "alg": alg.save(), "iteration": iteration, "step": step, "obs_sizes": obs_sizes,
+                "num_actions": num_actions, "torch_rng": torch.get_rng_state()}, buffer)
+    return run.write_checkpoint(step, "pt", buffer.getvalue())

@@ -1,0 +1,119 @@
+"""A training run on disk: config.yaml, metrics.jsonl, TensorBoard events and atomic checkpoints.
+
+    RUN/config.yaml            the resolved TrainConfig (every field, env config included)
+    RUN/metrics.jsonl          one JSON object per report: step (env steps so far), episode_return, ...
+    RUN/tb/                    TensorBoard events of the same numbers
+    RUN/checkpoints/*.pt|.pkl  checkpoints named by env step, written to a temporary file and renamed
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from pathlib import Path
+
+import yaml
+
+from policies.config import ConfigError, TrainConfig, load_config, to_dict
+
+CHECKPOINT = re.compile(r"^step_(\d{12})\.(pt|pkl)$")
+
+
+class RunDirError(ValueError):
+    """The run directory cannot be used (unwritable, not a run, no checkpoint); the message says why."""
+
+
+class RunDir:
+    """Files of one training run."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+
+    @property
+    def config_path(self) -> Path:
+        return self.path / "config.yaml"
+
+    @property
+    def metrics_path(self) -> Path:
+        return self.path / "metrics.jsonl"
+
+    @property
+    def checkpoint_dir(self) -> Path:
+        return self.path / "checkpoints"
+
+    def create(self, config: TrainConfig) -> "RunDir":
+        """Start a new run here; refuses a directory that already holds one."""
+        if self.config_path.exists():
+            raise RunDirError(f"{self.path} already holds a run; continue it with `legged train --resume "
+                              f"{self.path}` or choose another --run-dir")
+        try:
+            self.checkpoint_dir.mkdir(parents=True, exist_ok=True)
+            probe = self.path / ".write-test"
+            probe.write_text("ok")
+            probe.unlink()
+        except OSError as exc:
+            raise RunDirError(f"run directory {self.path} is not writable: {exc.strerror}") from None
+        self._atomic_write(self.config_path, yaml.safe_dump(to_dict(config), sort_keys=False).encode())
+        return self
+
+    def load_config(self) -> TrainConfig:
+        """The run's resolved config."""
+        if not self.config_path.is_file():
+            raise RunDirError(f"{self.path} is not a run directory (no config.yaml)")
+        try:
+            return load_config(yaml.safe_load(self.config_path.read_text()))
+        except (yaml.YAMLError, ConfigError) as exc:
+            raise RunDirError(f"{self.config_path} is unusable: {exc}") from None
+
+    def log(self, record: dict, writer=None) -> None:
+        """Append a metrics record (and its numbers to TensorBoard when a writer is given)."""
+        clean = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in record.items()}
+        with open(self.metrics_path, "a") as f:
+            f.write(json.dumps(clean) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+        if writer is not None:
+            for k, v in clean.items():
+                if k != "step" and isinstance(v, (int, float)) and v is not None:
+                    writer.add_scalar(k, v, record["step"])
+            writer.flush()
+
+    def metrics(self) -> list[dict]:
+        """All metrics records so far."""
+        if not self.metrics_path.is_file():
+            return []
+        return [json.loads(line) for line in self.metrics_path.read_text().splitlines() if line.strip()]
+
+    def checkpoint_path(self, step: int, suffix: str) -> Path:
+        return self.checkpoint_dir / f"step_{step:012d}.{suffix}"
+
+    def checkpoints(self) -> list[Path]:
+        """Checkpoints, oldest first."""
+        if not self.checkpoint_dir.is_dir():
+            return []
+        found = [p for p in self.checkpoint_dir.iterdir() if CHECKPOINT.match(p.name)]
+        return sorted(found, key=lambda p: int(CHECKPOINT.match(p.name).group(1)))
+
+    def latest_checkpoint(self) -> Path:
+        """The newest checkpoint; RunDirError if there is none."""
+        found = self.checkpoints()
+        if not found:
+            raise RunDirError(f"{self.path} has no checkpoint yet (nothing to resume or evaluate)")
+        return found[-1]
+
+    def write_checkpoint(self, step: int, suffix: str, payload: bytes) -> Path:
+        """Write a checkpoint atomically (a killed run never leaves a half-written file under the real name)."""
+        path = self.checkpoint_path(step, suffix)
+        self._atomic_write(path, payload)
+        return path
+
+    @staticmethod
+    def _atomic_write(path: Path, payload: bytes) -> None:
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        with open(tmp, "wb") as f:
+            f.write(payload)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)

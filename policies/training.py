@@ -1,0 +1,50 @@
+"""Starting and resuming training runs (what `legged train` calls); the backends do the training."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from policies.config import TrainConfig, apply_overrides
+from policies.run_dir import RunDir
+
+
+def build_env(config: TrainConfig):
+    """The run's environment: confined tasks on traversable worlds with planned waypoints."""
+    from planners import make_planned_env
+
+    return make_planned_env(config.task, config=config.env)
+
+
+def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> dict:
+    if config.backend == "brax":
+        from policies.brax_backend import check_devices, train_brax
+
+        check_devices(config)
+        return train_brax(build_env(config), config, run, resume=resume, progress=progress)
+    from policies.rsl_backend import train_rsl
+
+    return train_rsl(build_env(config), config, run, resume=resume, progress=progress)
+
+
+def start_run(task: str, run_dir: str | None, backend: str = "rsl", num_envs: int = 256, timesteps: int = 1_000_000,
+              seed: int = 0, overrides: list[str] = (), progress: bool = True) -> dict:
+    """Resolve the config, create the run directory, train; returns the last metrics record."""
+    config = TrainConfig(task=task, backend=backend, num_envs=num_envs, timesteps=timesteps, seed=seed).resolved()
+    config = apply_overrides(config, list(overrides))
+    if config.backend == "brax":
+        from policies.brax_backend import check_devices
+
+        check_devices(config)  # before anything is written
+    run = RunDir(run_dir or Path("runs") / f"{task}-{time.strftime('%Y%m%d-%H%M%S')}").create(config)
+    if progress:
+        print(f"[train] run directory {run.path}", flush=True)
+    return _train(config, run, resume=False, progress=progress)
+
+
+def resume_run(run_dir: str, progress: bool = True) -> dict:
+    """Continue a run from its last checkpoint with its own config, appending to its metrics."""
+    run = RunDir(run_dir)
+    config = run.load_config()
+    run.latest_checkpoint()  # fail now if there is nothing to resume from
+    return _train(config, run, resume=True, progress=progress)
