@@ -112,6 +112,8 @@ def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, prog
             raise RunDirError(f"checkpoint {path} expects observations {payload['obs_sizes']}; the environment "
                               f"gives {obs_sizes}")
         start_step, restore = payload["step"], payload["params"]
+        if start_step >= config.timesteps:
+            return run.metrics()[-1] if run.metrics() else {}
     per_iteration = config.num_envs * ppo.num_steps_per_env
     per_report = per_iteration * config.checkpoint_every
     remaining = max(config.timesteps - start_step, per_iteration)
@@ -128,6 +130,7 @@ def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, prog
         if "episode/sum_reward" not in metrics:
             last["losses"] = {k.replace("training/", "loss_"): _get(metrics, k) for k in metrics
                               if k.startswith("training/") and "loss" in k}
+            last["trained"] = start_step + int(step)
             return
         now = time.perf_counter()
         record = {"step": start_step + int(step), "episode_return": _get(metrics, "episode/sum_reward"),
@@ -163,6 +166,10 @@ def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, prog
             restore_params=restore, restore_value_fn=True)
     finally:
         bar.close()
+    if last.get("trained", 0) > last["record"].get("step", 0):  # no episode ended since the last record
+        last["record"] = {"step": last["trained"], "episode_return": None, "episode_length": None,
+                          **last.get("losses", {})}
+        run.log(last["record"])
     return last["record"]
 
 

@@ -143,3 +143,33 @@ def test_overrides_round_trip_through_yaml(tmp_path):
     assert run.load_config() == config
     with pytest.raises(ConfigError, match="expected float"):
         apply_overrides(config, ["ppo.learning_rate=fast"])
+
+
+def test_brax_backend_tiny_run_resume_and_export(tiny_env, tmp_path, monkeypatch):
+    """Brax PPO: a run killed right after its step-80 checkpoint resumes there; its policy exports."""
+    monkeypatch.setattr(training, "build_env", lambda config: tiny_env)
+    real_write = RunDir.write_checkpoint
+
+    def killed_after_checkpoint_80(self, step, suffix, payload):
+        path = real_write(self, step, suffix, payload)
+        if step == 80:
+            raise KeyboardInterrupt
+        return path
+
+    monkeypatch.setattr(RunDir, "write_checkpoint", killed_after_checkpoint_80)
+    run_dir = tmp_path / "brax"
+    with pytest.raises(KeyboardInterrupt):
+        training.start_run("go1-flat", str(run_dir), backend="brax", num_envs=BATCH, timesteps=120,
+                           overrides=TINY, progress=False)
+    monkeypatch.setattr(RunDir, "write_checkpoint", real_write)
+    run = RunDir(run_dir)
+    assert [p.name for p in run.checkpoints()] == ["step_000000000040.pkl", "step_000000000080.pkl"]
+    training.resume_run(str(run_dir), progress=False)
+    assert run.checkpoints()[-1].name == "step_000000000120.pkl"
+    records = run.metrics()
+    assert records[0]["step"] <= 80 and records[-1]["step"] == 120  # appended after the resume
+    lengths = [r["episode_length"] for r in records if r["episode_length"] is not None]
+    assert lengths and set(lengths) == {10.0}  # whole 0.2 s episodes (Brax's own auto-reset made them 1 step)
+    policy, _ = load_policy(run_dir)
+    assert policy.backend == "brax" and policy.step == 120
+    assert export_onnx(policy, tmp_path / "brax.onnx")["max_abs_diff"] <= 1e-4
