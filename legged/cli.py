@@ -22,6 +22,15 @@ def _ints(minimum: int):
     return parse
 
 
+def _print_records(records: list[dict], as_json: bool, print_table) -> int:
+    """Benchmark output: a JSON list, or the benchmark's own table."""
+    if as_json:
+        print(json.dumps(records))
+    else:
+        print_table(records)
+    return 0
+
+
 def cmd_world(args) -> int:
     from legged.robots import GO1
     from legged.worlds import generate_world, write_world
@@ -106,11 +115,7 @@ def cmd_bench_plan(args) -> int:
 
     records = bench_planner(args.difficulties, args.worlds, _planner_config(args), args.first_seed,
                             progress=not args.quiet)
-    if args.json:
-        print(json.dumps(records))
-    else:
-        print_table(records)
-    return 0
+    return _print_records(records, args.json, print_table)
 
 
 def _add_planner_options(parser) -> None:
@@ -134,11 +139,7 @@ def cmd_bench(args) -> int:
         if progress:
             progress("running the Playground peer in the same run")
         attach_peer(records, bench_peer(args.peer_python, args.peer_script, args.batch, args.seconds))
-    if args.json:
-        print(json.dumps(records))
-    else:
-        print_table(records)
-    return 0
+    return _print_records(records, args.json, print_table)
 
 
 def cmd_train(args) -> int:
@@ -158,19 +159,19 @@ def cmd_train(args) -> int:
 
 
 def cmd_eval(args) -> int:
+    import dataclasses
+
     from legged.envs.confined import ConfinedConfig
     from policies.evaluate import evaluate_mjx, evaluate_native, held_out, summarize
     from policies.policy_io import load_policy
+    from policies.run_dir import check_compatible
     from policies.training import build_env
-    import dataclasses
 
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     policy, config = load_policy(args.run_dir, args.checkpoint)
     env = build_env(dataclasses.replace(config, env=held_out(config.env)))
-    if env.observation_size["state"] != policy.obs_size and env.observation_size["state"] != (policy.obs_size,):
-        raise ValueError(f"checkpoint {policy.checkpoint} expects {policy.obs_size} observations; "
-                         f"the task gives {env.observation_size['state']}")
+    check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
     runner = evaluate_native if args.native else evaluate_mjx
     finals = runner(env, policy, args.episodes, args.seed, progress=not args.quiet)
     report = dict(summarize(finals, isinstance(config.env, ConfinedConfig)), physics="native" if args.native else "mjx",

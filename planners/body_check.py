@@ -97,10 +97,15 @@ class BodyChecker:
         n, p = points.shape[:2]
         return self.maps.lookup(points[..., :2].reshape(-1, 2), ceiling).reshape(n, p)
 
-    def stance_heights(self, poses) -> np.ndarray:
-        """Height of the body above the floor at each stance point, shape (n, n_feet) (nan off the map)."""
+    def stance_heights(self, poses, rot: np.ndarray | None = None) -> np.ndarray:
+        """Height of the body above the floor at each stance point, shape (n, n_feet) (nan off the map).
+
+        `rot` may pass the poses' rotation matrices when the caller has them already.
+        """
         poses = np.atleast_2d(np.asarray(poses, float))
-        stance = self._world(poses, rotation_rpy(poses[:, 3], poses[:, 4], poses[:, 5]), self.stance_points)
+        if rot is None:
+            rot = rotation_rpy(poses[:, 3], poses[:, 4], poses[:, 5])
+        stance = self._world(poses, rot, self.stance_points)
         return stance[..., 2] - self._surface(stance)
 
     def codes(self, poses) -> np.ndarray:
@@ -112,7 +117,7 @@ class BodyChecker:
         off = np.isnan(ceiling).any(1) | np.isnan(floor).any(1)
         code = np.full(len(poses), VALID)
         if self.config.check_heights:  # reported last: a collision is the more useful reason
-            height = self.stance_heights(poses)
+            height = self.stance_heights(poses, rot)
             lo, hi = self.height_range
             too_low = np.nan_to_num(height, nan=lo).min(1) < lo - 1e-9
             too_high = np.nan_to_num(height, nan=hi).max(1) > hi + 1e-9

@@ -199,7 +199,8 @@ def _check_endpoint(name: str, pose: np.ndarray, checker: BodyChecker, space: _S
     reason = checker.violation(pose)
     if reason:
         raise PlanningError(f"the {name} pose {np.round(pose, 3).tolist()} is in collision or unreachable: {reason}")
-    if np.any(space.to_vector(pose) < space.low - 1e-9) or np.any(space.to_vector(pose) > space.high + 1e-9):
+    state = space.to_vector(pose)
+    if np.any(state < space.low - 1e-9) or np.any(state > space.high + 1e-9):
         raise PlanningError(f"the {name} pose {np.round(pose, 3).tolist()} lies outside the planning bounds "
                             f"{np.round(space.low, 3).tolist()}..{np.round(space.high, 3).tolist()} (x, y, h, angles)")
 

@@ -61,24 +61,10 @@ class HeightMaps:
                               anti_diagonal=self.ceiling_anti_diagonal)
 
     def lookup(self, xy: np.ndarray, ceiling: bool = False) -> np.ndarray:
-        """Fast `floor_at` / `ceiling_at` for points (n, 2); nan for points off the map."""
-        grid = self.ceiling if ceiling else self.floor
-        nx, ny = grid.shape
-        f = (xy - self.origin) / self.resolution
-        fx, fy = f[:, 0], f[:, 1]
-        off = (fx < -1e-9) | (fy < -1e-9) | (fx > nx - 1 + 1e-9) | (fy > ny - 1 + 1e-9)
-        i = np.clip(fx, 0.0, nx - 2).astype(np.int64)
-        j = np.clip(fy, 0.0, ny - 2).astype(np.int64)
-        u, v = fx - i, fy - j
-        flat, k = grid.ravel(), i * ny + j
-        h00, h10, h01, h11 = flat[k], flat[k + ny], flat[k + 1], flat[k + ny + 1]
-        if ceiling and self.ceiling_anti_diagonal:
-            low = h00 + u * (h10 - h00) + v * (h01 - h00)
-            high = h11 + (1 - u) * (h01 - h11) + (1 - v) * (h10 - h11)
-            out = np.where(u + v <= 1.0, low, high)
-        else:
-            out = np.where(u >= v, h00 + u * (h10 - h00) + v * (h11 - h10), h00 + v * (h01 - h00) + u * (h11 - h01))
-        return np.where(off, np.nan, out)
+        """`floor_at` / `ceiling_at` for points (n, 2), with nan for points off the map."""
+        xy = np.asarray(xy, np.float64)
+        heights = self.ceiling_at(xy) if ceiling else self.floor_at(xy)
+        return np.where(self.contains(xy), heights, np.nan)
 
     def describe_bounds(self) -> str:
         """The map's x and y ranges as text."""

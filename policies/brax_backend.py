@@ -28,7 +28,7 @@ from brax.training.agents.ppo import train as brax_ppo
 from tqdm import tqdm
 
 from policies.config import ConfigError, TrainConfig
-from policies.run_dir import RunDir, RunDirError
+from policies.run_dir import RunDir, RunDirError, check_compatible
 
 
 def check_devices(config: TrainConfig) -> None:
@@ -103,14 +103,12 @@ def load_checkpoint(path) -> dict:
 def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, progress: bool = True) -> dict:
     """Train (or continue) `env` with Brax PPO; returns the last metrics record."""
     ppo = config.ppo
-    obs_sizes = {k: int(v[0]) if isinstance(v, tuple) else int(v) for k, v in env.observation_size.items()}
+    obs_sizes = env.observation_dims()
     start_step, restore = 0, None
     if resume:
         path = run.latest_checkpoint()
         payload = load_checkpoint(path)
-        if payload["obs_sizes"] != obs_sizes or payload["num_actions"] != env.action_size:
-            raise RunDirError(f"checkpoint {path} expects observations {payload['obs_sizes']}; the environment "
-                              f"gives {obs_sizes}")
+        check_compatible(payload["obs_sizes"], payload["num_actions"], env, path)
         start_step, restore = payload["step"], payload["params"]
         if start_step >= config.timesteps:
             return run.metrics()[-1] if run.metrics() else {}
@@ -134,7 +132,8 @@ def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, prog
             return
         now = time.perf_counter()
         record = {"step": start_step + int(step), "episode_return": _get(metrics, "episode/sum_reward"),
-                  "episode_length": _get(metrics, "episode/length"), "steps_per_s": (step - last["step"]) / max(now - last["time"], 1e-9)}
+                  "episode_length": _get(metrics, "episode/length"),
+                  "steps_per_s": (step - last["step"]) / max(now - last["time"], 1e-9)}
         record.update({f"episode_{k[8:].replace('/', '_')}": _get(metrics, k) for k in metrics
                        if k.startswith("episode/reward/") or k[8:] in ("success", "fell", "collisions")})
         record.update(last.get("losses", {}))

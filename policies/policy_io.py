@@ -24,8 +24,8 @@ class Policy:
     """'rsl' or 'brax'."""
     step: int
     """Environment steps the checkpoint was trained for."""
-    obs_size: int
-    """Size of the actor's observation (`state`)."""
+    obs_sizes: dict
+    """Observation sizes it was trained with ({'state': n, 'privileged_state': m})."""
     num_actions: int
     """Size of the action."""
     checkpoint: Path
@@ -34,6 +34,11 @@ class Policy:
     """rsl: the deterministic actor (obs -> action) as a torch module, for export."""
     brax_params: tuple | None = None
     """brax: (normaliser, policy) parameters, for export."""
+
+    @property
+    def obs_size(self) -> int:
+        """Size of the actor's observation (`state`)."""
+        return self.obs_sizes["state"]
 
 
 def _rsl_policy(config: TrainConfig, path: Path) -> Policy:
@@ -48,7 +53,7 @@ def _rsl_policy(config: TrainConfig, path: Path) -> Policy:
         with torch.inference_mode():
             return module(torch.as_tensor(np.asarray(obs, np.float32))).numpy()
 
-    return Policy(act=act, backend="rsl", step=payload["step"], obs_size=payload["obs_sizes"]["state"],
+    return Policy(act=act, backend="rsl", step=payload["step"], obs_sizes=payload["obs_sizes"],
                   num_actions=payload["num_actions"], checkpoint=path, torch_module=module)
 
 
@@ -71,7 +76,7 @@ def _brax_policy(config: TrainConfig, path: Path) -> Policy:
         full = {"state": obs, "privileged_state": np.zeros((len(obs), sizes["privileged_state"]), np.float32)}
         return np.asarray(inference(full, key)[0])
 
-    return Policy(act=act, backend="brax", step=payload["step"], obs_size=sizes["state"],
+    return Policy(act=act, backend="brax", step=payload["step"], obs_sizes=sizes,
                   num_actions=payload["num_actions"], checkpoint=path, brax_params=(params[0], params[1]))
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import io
 import math
 import time
@@ -16,7 +17,7 @@ from tqdm import tqdm
 from legged.envs.vector import VectorEnv
 from policies.config import PPOConfig, TrainConfig
 from policies.rsl_vecenv import OBS_GROUPS, RslVecEnv
-from policies.run_dir import RunDir, RunDirError
+from policies.run_dir import RunDir, RunDirError, check_compatible
 
 
 def rsl_config(ppo: PPOConfig) -> dict:
@@ -55,8 +56,6 @@ class _Shapes:
 
 def build_ppo(obs: TensorDict, num_envs: int, num_actions: int, ppo: PPOConfig, device: str) -> PPO:
     """rsl-rl PPO with its actor, critic and rollout storage."""
-    import contextlib
-
     with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints the whole network
         return PPO.construct_algorithm(obs, _Shapes(num_envs, num_actions), rsl_config(ppo), device)
 
@@ -72,46 +71,17 @@ def load_checkpoint(path: Path) -> dict:
     return payload
 
 
-def check_compatible(payload: dict, obs_sizes: dict, num_actions: int, path: Path) -> None:
-    """Refuse a checkpoint whose observation or action sizes differ from the environment's."""
-    if payload["obs_sizes"] != obs_sizes or payload["num_actions"] != num_actions:
-        raise RunDirError(f"checkpoint {path} expects observations {payload['obs_sizes']} and "
-                          f"{payload['num_actions']} actions; the environment gives {obs_sizes} and {num_actions}")
-
-
-class EpisodeStats:
-    """Sums of the statistics of finished episodes between two reports."""
-
-    def __init__(self):
-        self.count, self.sums = 0, {}
-
-    def add(self, result) -> None:
-        n = int(result.done.sum())
-        if n:
-            self.count += n
-            for k, v in result.finished.items():
-                self.sums[k] = self.sums.get(k, 0.0) + float(v.sum())
-
-    def means(self) -> dict:
-        """{'episode_<stat>': mean} over the episodes since the last call, then reset."""
-        out = {"episodes": self.count}
-        for k, total in self.sums.items():
-            out[f"episode_{k.replace('/', '_')}"] = total / self.count
-        self.count, self.sums = 0, {}
-        return out
-
-
 def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progress: bool = True) -> dict:
     """Train (or continue training) `env` with rsl-rl PPO; returns the last metrics record."""
     ppo = config.ppo
     per_iteration = config.num_envs * ppo.num_steps_per_env
     iterations = math.ceil(config.timesteps / per_iteration)
     payload, iteration, step = None, 0, 0
-    obs_sizes = {k: int(v[0]) if isinstance(v, tuple) else int(v) for k, v in env.observation_size.items()}
+    obs_sizes = env.observation_dims()
     if resume:
         path = run.latest_checkpoint()
         payload = load_checkpoint(path)
-        check_compatible(payload, obs_sizes, env.action_size, path)
+        check_compatible(payload["obs_sizes"], payload["num_actions"], env, path)
         iteration, step = payload["iteration"], payload["step"]
     torch.manual_seed(config.seed)
     vector = VectorEnv.of(env, config.num_envs)
@@ -125,7 +95,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     from torch.utils.tensorboard import SummaryWriter
 
     writer = SummaryWriter(str(run.path / "tb"))
-    stats, record = EpisodeStats(), {}
+    record = {}
     bar = tqdm(total=iterations * per_iteration, initial=step, unit="step", unit_scale=True,
                desc=f"{config.task} rsl", disable=not progress)
     obs = venv.get_observations()
@@ -133,22 +103,22 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     try:
         while iteration < iterations:
             t0 = time.perf_counter()
-            reward_sum = 0.0
+            reward_sum = torch.zeros((), device=config.device)
             with torch.inference_mode():
                 for _ in range(ppo.num_steps_per_env):
                     actions = alg.act(obs)
                     obs, rewards, dones, extras = venv.step(actions)
                     alg.process_env_step(obs, rewards, dones, extras)
-                    stats.add(venv.last_result)
-                    reward_sum += float(rewards.mean())
+                    reward_sum += rewards.mean()
                 alg.compute_returns(obs)
             losses = alg.update()
             iteration += 1
             step += per_iteration
             elapsed = time.perf_counter() - t0
             record = {"step": step, "iteration": iteration, "episode_return": None, "episode_length": None,
-                      **stats.means(),
-                      "reward_per_step": reward_sum / ppo.num_steps_per_env, "steps_per_s": per_iteration / elapsed,
+                      **venv.episode_stats.means(),
+                      "reward_per_step": float(reward_sum) / ppo.num_steps_per_env,
+                      "steps_per_s": per_iteration / elapsed,
                       "learning_rate": alg.learning_rate,
                       "action_std": float(alg.get_policy().output_std.detach().mean()),
                       **{f"loss_{k}": float(v) for k, v in losses.items()}}

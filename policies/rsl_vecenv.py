@@ -20,6 +20,37 @@ OBS_GROUPS = {"actor": ["state"], "critic": ["privileged_state"]}
 """Asymmetric actor-critic: what the actor and the critic read."""
 
 
+@jax.jit
+def _episode_totals(result) -> tuple[jax.Array, dict]:
+    """Number of episodes that ended in a step and the sum of each of their statistics (on the device)."""
+    return result.done.sum(), {k: v.sum() for k, v in result.finished.items()}
+
+
+class EpisodeStats:
+    """Statistics of finished episodes, summed between two `means()` calls (one host transfer per step)."""
+
+    def __init__(self):
+        self.count, self.sums = 0, {}
+
+    def add(self, result) -> dict:
+        """Add one vector step; returns that step's means ({} when no episode ended)."""
+        count, totals = jax.device_get(_episode_totals(result))
+        count = int(count)
+        if not count:
+            return {}
+        self.count += count
+        for k, v in totals.items():
+            self.sums[k] = self.sums.get(k, 0.0) + float(v)
+        return {k: float(v) / count for k, v in totals.items()}
+
+    def means(self) -> dict:
+        """{'episodes': n, 'episode_<stat>': mean} over the episodes since the last call, then reset."""
+        out = {"episodes": self.count}
+        out.update({f"episode_{k.replace('/', '_')}": total / self.count for k, total in self.sums.items()})
+        self.count, self.sums = 0, {}
+        return out
+
+
 def to_torch(x: jax.Array, device: torch.device) -> torch.Tensor:
     """A JAX array as a torch tensor (shared memory through DLPack where the devices match)."""
     tensor = torch.from_dlpack(x)
@@ -42,7 +73,8 @@ class RslVecEnv(VecEnv):
         self.device = torch.device(device)
         self.cfg = cfg or {}
         self.batch = vector.reset(jax.random.PRNGKey(seed))
-        self._obs, self.last_result = self.batch.state.obs, None
+        self._obs = self.batch.state.obs
+        self.episode_stats = EpisodeStats()
 
     @property
     def episode_length_buf(self) -> torch.Tensor:
@@ -62,16 +94,9 @@ class RslVecEnv(VecEnv):
 
     def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
         self.batch, result = self.vector.step(self.batch, to_jax(actions).astype(jnp.float32))
-        self._obs, self.last_result = result.obs, result
-        extras = {"time_outs": to_torch(result.time_out, self.device), "log": self._episode_log(result)}
+        self._obs = result.obs
+        step_means = self.episode_stats.add(result)
+        extras = {"time_outs": to_torch(result.time_out, self.device),
+                  "log": {f"/episode/{k}": v for k, v in step_means.items()}}
         done = to_torch(result.done, self.device).long()
         return self.get_observations(), to_torch(result.reward, self.device), done, extras
-
-    @staticmethod
-    def _episode_log(result) -> dict:
-        """Mean of each statistic over the episodes that ended this step ({} if none did)."""
-        count = float(result.done.sum())
-        if count == 0:
-            return {}
-        return {f"/episode/{k}": float(v.sum()) / count for k, v in result.finished.items()}
-

@@ -25,6 +25,13 @@ class RunDirError(ValueError):
     """The run directory cannot be used (unwritable, not a run, no checkpoint); the message says why."""
 
 
+def check_compatible(obs_sizes: dict, num_actions: int, env, source) -> None:
+    """Refuse a checkpoint (or policy) whose observation or action sizes differ from the environment's."""
+    if obs_sizes != env.observation_dims() or num_actions != env.action_size:
+        raise RunDirError(f"checkpoint {source} expects observations {obs_sizes} and {num_actions} actions; "
+                          f"the environment gives {env.observation_dims()} and {env.action_size}")
+
+
 class RunDir:
     """Files of one training run."""
 

@@ -18,9 +18,8 @@ def build_env(config: TrainConfig):
 
 def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> dict:
     if config.backend == "brax":
-        from policies.brax_backend import check_devices, train_brax
+        from policies.brax_backend import train_brax
 
-        check_devices(config)
         return train_brax(build_env(config), config, run, resume=resume, progress=progress)
     from policies.rsl_backend import train_rsl
 
@@ -47,4 +46,8 @@ def resume_run(run_dir: str, progress: bool = True) -> dict:
     run = RunDir(run_dir)
     config = run.load_config()
     run.latest_checkpoint()  # fail now if there is nothing to resume from
+    if config.backend == "brax":
+        from policies.brax_backend import check_devices
+
+        check_devices(config)
     return _train(config, run, resume=True, progress=progress)

@@ -15,9 +15,8 @@ from policies.config import ConfigError, TrainConfig, apply_overrides
 from policies.evaluate import evaluate_mjx, summarize
 from policies.export import export_onnx
 from policies.policy_io import load_policy
-from policies.rsl_backend import check_compatible
 from policies.rsl_vecenv import RslVecEnv
-from policies.run_dir import RunDir, RunDirError
+from policies.run_dir import RunDir, RunDirError, check_compatible
 from tests.conftest import BATCH
 
 EPISODE_S = 0.2
@@ -114,7 +113,7 @@ def test_confined_summary_metrics():
     assert report["episode_return"] == 2.0 and report["reward_terms"] == {"exploration": 1.0}
 
 
-def test_bad_input_fails_before_training(tmp_path, capsys):
+def test_bad_input_fails_before_training(tiny_env, tmp_path, capsys):
     from legged.cli import main
 
     assert main(["train", "no-such-task", "--run-dir", str(tmp_path / "a")]) == 2
@@ -129,8 +128,7 @@ def test_bad_input_fails_before_training(tmp_path, capsys):
     assert main(["train", "--resume", str(tmp_path)]) == 2
     assert "not a run directory" in capsys.readouterr().err
     with pytest.raises(RunDirError, match="expects observations"):
-        check_compatible({"obs_sizes": {"state": 261, "privileged_state": 295}, "num_actions": 12},
-                         {"state": 42, "privileged_state": 74}, 12, tmp_path / "x.pt")
+        check_compatible({"state": 261, "privileged_state": 295}, 12, tiny_env, tmp_path / "x.pt")
     assert main(["eval", str(tmp_path), "--episodes", "2"]) == 2
 
 

@@ -146,6 +146,10 @@ class LeggedEnv(Env, abc.ABC):
             self._obs_size = {k: v.shape for k, v in shapes.items()}
         return self._obs_size
 
+    def observation_dims(self) -> dict[str, int]:
+        """Length of each (flat) observation vector: {'state': n, 'privileged_state': m}."""
+        return {k: int(shape[0]) for k, shape in self.observation_size.items()}
+
     @property
     def backend(self) -> str:
         return "mjx"

@@ -48,10 +48,11 @@ def surface_height(grid, origin, resolution, xy, anti_diagonal: bool = False):
     xp = jnp if not isinstance(grid, np.ndarray) else np
     nx, ny = grid.shape
     f = (xy - origin) / resolution
-    fx = xp.clip(f[..., 0], 0.0, nx - 1.0)
-    fy = xp.clip(f[..., 1], 0.0, ny - 1.0)
-    i = xp.clip(xp.floor(fx).astype(np.int32), 0, nx - 2)
-    j = xp.clip(xp.floor(fy).astype(np.int32), 0, ny - 2)
+    # minimum/maximum rather than clip: the same result, and numpy's clip is slow on small arrays.
+    fx = xp.minimum(xp.maximum(f[..., 0], 0.0), nx - 1.0)
+    fy = xp.minimum(xp.maximum(f[..., 1], 0.0), ny - 1.0)
+    i = xp.minimum(xp.floor(fx).astype(np.int32), nx - 2)
+    j = xp.minimum(xp.floor(fy).astype(np.int32), ny - 2)
     u, v = fx - i, fy - j
     h00, h10 = grid[i, j], grid[i + 1, j]
     h01, h11 = grid[i, j + 1], grid[i + 1, j + 1]
