@@ -7,8 +7,10 @@ completely instead (a fresh `reset` with a new key), keeping only the episode bo
 EpisodeWrapper for the transition that ended.
 
 Resume: Brax's `ppo.train` accepts the normaliser, policy and value parameters to start from but not the
-optimiser state, so a resumed Brax run continues from the last parameters and step count with fresh Adam
-moments (the rsl backend restores the optimiser too).
+optimiser state. `OptimizerStateTap` fills that gap: it watches the training state at the one place
+where `ppo.train` hands it over outside of compiled code (its `_strip_weak_type` call around every
+training epoch, brax 0.14.2), so checkpoints carry the Adam moments and the adaptive-KL learning rate,
+and a resumed run starts from them instead of fresh ones.
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ import functools
 import math
 import pickle
 import time
+
+import contextlib
 
 import jax
 import jax.numpy as jnp
@@ -32,10 +36,10 @@ from policies.run_dir import RunDir, RunDirError, check_compatible
 
 
 def check_devices(config: TrainConfig) -> None:
-    """Brax PPO splits the environments over the local devices: the count must divide evenly."""
-    devices = jax.local_device_count()
+    """Brax PPO splits the environments over all devices (of every process): the count must divide evenly."""
+    devices = jax.device_count()
     if config.num_envs % devices:
-        raise ConfigError(f"num_envs {config.num_envs} is not divisible by the {devices} local JAX devices")
+        raise ConfigError(f"num_envs {config.num_envs} is not divisible by the {devices} JAX devices")
     if config.num_envs % config.ppo.num_mini_batches:
         raise ConfigError(f"num_envs {config.num_envs} must be divisible by ppo.num_mini_batches "
                           f"{config.ppo.num_mini_batches} for Brax PPO")
@@ -100,16 +104,54 @@ def load_checkpoint(path) -> dict:
     return payload
 
 
+class OptimizerStateTap:
+    """Reads (and on resume, replaces) the optimiser state inside Brax's `ppo.train` (module docstring)."""
+
+    def __init__(self, restore=None):
+        self.restore = restore
+        """Optimiser state (host arrays) to start from, or None for Brax's fresh one."""
+        self.latest = None
+        """Optimiser state after the last training epoch (host arrays, first device's copy)."""
+
+    def _see(self, tree):
+        if not (isinstance(tree, tuple) and isinstance(tree[0], brax_ppo.TrainingState)):
+            return tree
+        state = tree[0]
+        if len(tree) == 2 and self.restore is not None:  # the first epoch's input: put the saved state in
+            fresh = jax.tree_util.tree_structure(state.optimizer_state)
+            saved = jax.tree_util.tree_structure(self.restore)
+            if fresh != saved:
+                raise RunDirError(f"the checkpoint's optimiser state does not fit this run's optimiser "
+                                  f"({saved} vs {fresh})")
+            devices = jax.local_devices()[:jax.tree_util.tree_leaves(state.params)[0].shape[0]]
+            tree = (state.replace(optimizer_state=jax.device_put_replicated(self.restore, devices)),) + tree[1:]
+            self.restore = None
+        elif len(tree) == 3:  # an epoch's output
+            self.latest = jax.device_get(jax.tree_util.tree_map(lambda x: x[0], state.optimizer_state))
+        return tree
+
+    @contextlib.contextmanager
+    def attached(self):
+        """Hook into `ppo.train` for the duration of the block."""
+        original = brax_ppo._strip_weak_type
+        brax_ppo._strip_weak_type = lambda tree: original(self._see(tree))
+        try:
+            yield self
+        finally:
+            brax_ppo._strip_weak_type = original
+
+
 def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, progress: bool = True) -> dict:
     """Train (or continue) `env` with Brax PPO; returns the last metrics record."""
     ppo = config.ppo
     obs_sizes = env.observation_dims()
-    start_step, restore = 0, None
+    start_step, restore, tap = 0, None, OptimizerStateTap()
     if resume:
         path = run.latest_checkpoint()
         payload = load_checkpoint(path)
         check_compatible(payload["obs_sizes"], payload["num_actions"], env, path)
         start_step, restore = payload["step"], payload["params"]
+        tap.restore = payload.get("optimizer_state")
         if start_step >= config.timesteps:
             return run.metrics()[-1] if run.metrics() else {}
     per_iteration = config.num_envs * ppo.num_steps_per_env
@@ -147,22 +189,24 @@ def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, prog
         if step == 0:
             return
         payload = {"backend": "brax", "step": start_step + int(step), "params": jax.device_get(params),
-                   "obs_sizes": obs_sizes, "num_actions": env.action_size, "config": config.task}
+                   "optimizer_state": tap.latest, "obs_sizes": obs_sizes, "num_actions": env.action_size,
+                   "config": config.task}
         run.write_checkpoint(start_step + int(step), "pkl", pickle.dumps(payload))
 
     try:
-        brax_ppo.train(
-            environment=env, num_timesteps=remaining, num_envs=config.num_envs,
-            episode_length=env.config.episode_steps, unroll_length=ppo.num_steps_per_env,
-            batch_size=config.num_envs // ppo.num_mini_batches, num_minibatches=ppo.num_mini_batches,
-            num_updates_per_batch=ppo.num_learning_epochs, learning_rate=ppo.learning_rate,
-            learning_rate_schedule="ADAPTIVE_KL", desired_kl=ppo.desired_kl, entropy_cost=ppo.entropy_coef,
-            discounting=ppo.gamma, gae_lambda=ppo.lam,
-            clipping_epsilon=ppo.clip_param, max_grad_norm=ppo.max_grad_norm, normalize_observations=True,
-            network_factory=network_factory(config), seed=config.seed + start_step, num_evals=reports + 1,
-            run_evals=False, log_training_metrics=True, progress_fn=on_progress, policy_params_fn=on_params,
-            wrap_env_fn=wrap_for_training,
-            restore_params=restore, restore_value_fn=True)
+        with tap.attached():
+            brax_ppo.train(
+                environment=env, num_timesteps=remaining, num_envs=config.num_envs,
+                episode_length=env.config.episode_steps, unroll_length=ppo.num_steps_per_env,
+                batch_size=config.num_envs // ppo.num_mini_batches, num_minibatches=ppo.num_mini_batches,
+                num_updates_per_batch=ppo.num_learning_epochs, learning_rate=ppo.learning_rate,
+                learning_rate_schedule="ADAPTIVE_KL", desired_kl=ppo.desired_kl, entropy_cost=ppo.entropy_coef,
+                discounting=ppo.gamma, gae_lambda=ppo.lam,
+                clipping_epsilon=ppo.clip_param, max_grad_norm=ppo.max_grad_norm, normalize_observations=True,
+                network_factory=network_factory(config), seed=config.seed + start_step, num_evals=reports + 1,
+                run_evals=False, log_training_metrics=True, progress_fn=on_progress, policy_params_fn=on_params,
+                wrap_env_fn=wrap_for_training,
+                restore_params=restore, restore_value_fn=True)
     finally:
         bar.close()
     if last.get("trained", 0) > last["record"].get("step", 0):  # no episode ended since the last record

@@ -16,11 +16,12 @@ from tqdm import tqdm
 
 from legged.envs.vector import VectorEnv
 from policies.config import PPOConfig, TrainConfig
+from policies.distributed import Launch, init_torch_processes
 from policies.rsl_vecenv import OBS_GROUPS, RslVecEnv
 from policies.run_dir import RunDir, RunDirError, check_compatible
 
 
-def rsl_config(ppo: PPOConfig) -> dict:
+def rsl_config(ppo: PPOConfig, multi_gpu: dict | None = None) -> dict:
     """rsl-rl's train_cfg for PPO with an MLP actor on `state` and an MLP critic on `privileged_state`."""
     def model(hidden, stochastic):
         cfg = {"class_name": "MLPModel", "hidden_dims": list(hidden), "activation": ppo.activation,
@@ -38,7 +39,7 @@ def rsl_config(ppo: PPOConfig) -> dict:
         "critic": model(ppo.critic_hidden, False),
         "obs_groups": dict(OBS_GROUPS),
         "num_steps_per_env": ppo.num_steps_per_env,
-        "multi_gpu": None,
+        "multi_gpu": multi_gpu,
     }
 
 
@@ -54,10 +55,12 @@ class _Shapes:
         self.num_envs, self.num_actions = num_envs, num_actions
 
 
-def build_ppo(obs: TensorDict, num_envs: int, num_actions: int, ppo: PPOConfig, device: str) -> PPO:
-    """rsl-rl PPO with its actor, critic and rollout storage."""
+def build_ppo(obs: TensorDict, num_envs: int, num_actions: int, ppo: PPOConfig, device: str,
+              launch: Launch = Launch()) -> PPO:
+    """rsl-rl PPO with its actor, critic and rollout storage (gradients averaged over `launch`'s processes)."""
     with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints the whole network
-        return PPO.construct_algorithm(obs, _Shapes(num_envs, num_actions), rsl_config(ppo), device)
+        return PPO.construct_algorithm(obs, _Shapes(num_envs, num_actions),
+                                       rsl_config(ppo, launch.multi_gpu_config()), device)
 
 
 def load_checkpoint(path: Path) -> dict:
@@ -72,8 +75,15 @@ def load_checkpoint(path: Path) -> dict:
 
 
 def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progress: bool = True) -> dict:
-    """Train (or continue training) `env` with rsl-rl PPO; returns the last metrics record."""
+    """Train (or continue training) `env` with rsl-rl PPO; returns the last metrics record.
+
+    Under torchrun every process runs this with its share of the environments (policies.distributed);
+    only rank 0 logs and writes checkpoints.
+    """
     ppo = config.ppo
+    launch = Launch.from_env()
+    local_envs = launch.envs_per_process(config.num_envs)
+    device = init_torch_processes(launch, config.device)
     per_iteration = config.num_envs * ppo.num_steps_per_env
     iterations = math.ceil(config.timesteps / per_iteration)
     payload, iteration, step = None, 0, 0
@@ -83,27 +93,29 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         payload = load_checkpoint(path)
         check_compatible(payload["obs_sizes"], payload["num_actions"], env, path)
         iteration, step = payload["iteration"], payload["step"]
-    torch.manual_seed(config.seed)
-    vector = VectorEnv.of(env, config.num_envs)
-    venv = RslVecEnv(vector, seed=int(jax.random.randint(jax.random.fold_in(jax.random.PRNGKey(config.seed),
-                                                                            iteration), (), 0, 2**30)),
-                     device=config.device)
-    alg = build_ppo(venv.get_observations(), config.num_envs, env.action_size, ppo, config.device)
+    torch.manual_seed(config.seed + launch.rank)
+    vector = VectorEnv.of(env, local_envs)
+    key = jax.random.fold_in(jax.random.fold_in(jax.random.PRNGKey(config.seed), iteration), launch.rank)
+    venv = RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device)
+    alg = build_ppo(venv.get_observations(), local_envs, env.action_size, ppo, device, launch)
     if payload is not None:
         alg.load(payload["alg"], None, strict=True)
-        torch.set_rng_state(payload["torch_rng"])
+        if launch.is_main:
+            torch.set_rng_state(payload["torch_rng"])
+    if launch.distributed:
+        alg.broadcast_parameters()  # every process starts from rank 0's networks
     from torch.utils.tensorboard import SummaryWriter
 
-    writer = SummaryWriter(str(run.path / "tb"))
+    writer = SummaryWriter(str(run.path / "tb")) if launch.is_main else None
     record = {}
     bar = tqdm(total=iterations * per_iteration, initial=step, unit="step", unit_scale=True,
-               desc=f"{config.task} rsl", disable=not progress)
+               desc=f"{config.task} rsl", disable=not (progress and launch.is_main))
     obs = venv.get_observations()
     alg.train_mode()
     try:
         while iteration < iterations:
             t0 = time.perf_counter()
-            reward_sum = torch.zeros((), device=config.device)
+            reward_sum = torch.zeros((), device=device)
             with torch.inference_mode():
                 for _ in range(ppo.num_steps_per_env):
                     actions = alg.act(obs)
@@ -122,14 +134,17 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                       "learning_rate": alg.learning_rate,
                       "action_std": float(alg.get_policy().output_std.detach().mean()),
                       **{f"loss_{k}": float(v) for k, v in losses.items()}}
-            run.log(record, writer)
             bar.update(per_iteration)
             bar.set_postfix(ret=_short(record["episode_return"]), sps=f"{record['steps_per_s']:.0f}")
+            if not launch.is_main:
+                continue
+            run.log(record, writer)
             if iteration % config.checkpoint_every == 0 or iteration == iterations:
                 save_checkpoint(run, alg, iteration, step, obs_sizes, env.action_size)
     finally:
         bar.close()
-        writer.close()
+        if writer is not None:
+            writer.close()
     return record
 
 

@@ -26,17 +26,34 @@ def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> di
     return train_rsl(build_env(config), config, run, resume=resume, progress=progress)
 
 
+def _prepare(config: TrainConfig) -> bool:
+    """Check the device split before anything is written; True in the process that writes the run."""
+    if config.backend == "brax":
+        import jax
+
+        from policies.brax_backend import check_devices
+        from policies.distributed import init_jax_processes
+
+        init_jax_processes()
+        check_devices(config)
+        return jax.process_index() == 0
+    from policies.distributed import Launch
+
+    launch = Launch.from_env()
+    launch.envs_per_process(config.num_envs)
+    return launch.is_main
+
+
 def start_run(task: str, run_dir: str | None, backend: str = "rsl", num_envs: int = 256, timesteps: int = 1_000_000,
               seed: int = 0, overrides: list[str] = (), progress: bool = True) -> dict:
     """Resolve the config, create the run directory, train; returns the last metrics record."""
     config = TrainConfig(task=task, backend=backend, num_envs=num_envs, timesteps=timesteps, seed=seed).resolved()
     config = apply_overrides(config, list(overrides))
-    if config.backend == "brax":
-        from policies.brax_backend import check_devices
-
-        check_devices(config)  # before anything is written
-    run = RunDir(run_dir or Path("runs") / f"{task}-{time.strftime('%Y%m%d-%H%M%S')}").create(config)
-    if progress:
+    main = _prepare(config)
+    run = RunDir(run_dir or Path("runs") / f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
+    if main:
+        run.create(config)
+    if progress and main:
         print(f"[train] run directory {run.path}", flush=True)
     return _train(config, run, resume=False, progress=progress)
 
@@ -46,8 +63,5 @@ def resume_run(run_dir: str, progress: bool = True) -> dict:
     run = RunDir(run_dir)
     config = run.load_config()
     run.latest_checkpoint()  # fail now if there is nothing to resume from
-    if config.backend == "brax":
-        from policies.brax_backend import check_devices
-
-        check_devices(config)
+    _prepare(config)
     return _train(config, run, resume=True, progress=progress)

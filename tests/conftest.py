@@ -35,3 +35,13 @@ def flat():
 def confined():
     terrain = Terrain.from_worlds([generate_world(11, 0), generate_world(12, 2)])
     return Compiled(ConfinedEnv(ConfinedConfig(mode="waypoints"), terrain=terrain))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def compilation_cache(tmp_path_factory):
+    """A per-session persistent XLA cache: a program compiled twice in one session (a training run and
+    its resume) is compiled once. A fresh directory keeps every session independent of earlier ones."""
+    jax.config.update("jax_compilation_cache_dir", str(tmp_path_factory.mktemp("xla-cache")))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
+    yield
+    jax.config.update("jax_compilation_cache_dir", None)

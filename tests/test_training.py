@@ -5,6 +5,7 @@ object or batch size would compile again (about a minute on 2 CPU cores).
 """
 
 
+import jax
 import pytest
 import torch
 
@@ -143,8 +144,18 @@ def test_overrides_round_trip_through_yaml(tmp_path):
         apply_overrides(config, ["ppo.learning_rate=fast"])
 
 
+def _adam_count(opt_state) -> int:
+    """Adam's update counter inside an optax optimiser state."""
+    counts = [int(node.count) for node in jax.tree_util.tree_leaves(
+        opt_state, is_leaf=lambda n: hasattr(n, "mu") and hasattr(n, "count")) if hasattr(node, "mu")]
+    assert len(counts) == 1
+    return counts[0]
+
+
 def test_brax_backend_tiny_run_resume_and_export(tiny_env, tmp_path, monkeypatch):
-    """Brax PPO: a run killed right after its step-80 checkpoint resumes there; its policy exports."""
+    """Brax PPO: a run killed right after its step-80 checkpoint resumes there, optimiser state included."""
+    from policies.brax_backend import load_checkpoint
+
     monkeypatch.setattr(training, "build_env", lambda config: tiny_env)
     real_write = RunDir.write_checkpoint
 
@@ -168,6 +179,23 @@ def test_brax_backend_tiny_run_resume_and_export(tiny_env, tmp_path, monkeypatch
     assert records[0]["step"] <= 80 and records[-1]["step"] == 120  # appended after the resume
     lengths = [r["episode_length"] for r in records if r["episode_length"] is not None]
     assert lengths and set(lengths) == {10.0}  # whole 0.2 s episodes (Brax's own auto-reset made them 1 step)
+    saved = [load_checkpoint(run.checkpoint_dir / f"step_{n:012d}.pkl")["optimizer_state"] for n in (80, 120)]
+    updates = 5 * 2  # one iteration: 5 epochs x 2 minibatches
+    assert _adam_count(saved[0]) == 2 * updates  # two iterations before the kill
+    assert _adam_count(saved[1]) == 3 * updates  # Adam's moments continued, not restarted
     policy, _ = load_policy(run_dir)
     assert policy.backend == "brax" and policy.step == 120
     assert export_onnx(policy, tmp_path / "brax.onnx")["max_abs_diff"] <= 1e-4
+
+
+def test_torchrun_launch_splits_environments():
+    from policies.distributed import Launch
+
+    launch = Launch.from_env({"WORLD_SIZE": "4", "RANK": "2", "LOCAL_RANK": "2"})
+    assert launch.distributed and not launch.is_main and launch.envs_per_process(4096) == 1024
+    assert launch.multi_gpu_config() == {"global_rank": 2, "local_rank": 2, "world_size": 4}
+    with pytest.raises(ConfigError, match="not divisible by the 4 training processes"):
+        launch.envs_per_process(4098)
+    with pytest.raises(ConfigError, match="bad torchrun environment"):
+        Launch.from_env({"WORLD_SIZE": "2", "RANK": "2"})
+    assert Launch.from_env({}).multi_gpu_config() is None
