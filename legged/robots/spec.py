@@ -29,7 +29,7 @@ class RobotSpec:
     action_scale: float
     """Joint target = default pose + action_scale * action."""
     feet_geoms: tuple[str, ...]
-    """Foot collision geoms (spheres), in leg order."""
+    """Foot collision geoms (Go1: spheres, OP3: boxes), in leg order."""
     feet_sites: tuple[str, ...]
     """Foot sites, in leg order."""
     body_geoms: tuple[str, ...]
@@ -46,6 +46,10 @@ class RobotSpec:
     """Base height above flat ground at the default pose, metres (measured, see tests)."""
     body_height_range: tuple[float, float]
     """Lowest and highest height of the body above the floor under each foot that the legs can hold (planners)."""
+    arm_geoms: tuple[str, ...] = ()
+    """Arm collision geoms (humanoids; empty for quadrupeds)."""
+    head_camera: str | None = None
+    """MJCF camera on the head that sees what the robot's own camera sees (None: the robot has none)."""
 
     @property
     def num_joints(self) -> int:
@@ -55,4 +59,4 @@ class RobotSpec:
     @property
     def collision_geoms(self) -> tuple[str, ...]:
         """All geoms whose contact with the world is a penalised collision (not the feet)."""
-        return self.body_geoms + self.thigh_geoms + self.calf_geoms
+        return self.body_geoms + self.arm_geoms + self.thigh_geoms + self.calf_geoms
