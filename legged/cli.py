@@ -203,7 +203,37 @@ def cmd_tasks(args) -> int:
 def cmd_demo(args) -> int:
     from legged.demo import run_demo
 
-    return run_demo(args.out, args.seconds, args.seed, args.difficulty)
+    view = {"host": args.host, "port": args.port} if args.view else None
+    return run_demo(args.out, args.seconds, args.seed, args.difficulty, view=view)
+
+
+def cmd_view(args) -> int:
+    from web.app import Dashboard, DashboardConfig
+    from web.source import ViewRequest, resolve
+
+    request = ViewRequest(run_dir=args.run_dir, task=args.task, checkpoint=args.checkpoint, trajectory=args.trajectory,
+                          num_envs=args.num_envs, seed=args.seed, steps=args.steps, host=args.host,
+                          port=None if args.save else args.port)
+    resolved = resolve(request, log=lambda msg: print(msg, flush=True))
+    if args.save:
+        if resolved.source is None:
+            raise ValueError("--save records a rollout; it cannot be combined with --trajectory")
+        print("[view] compiling and recording (about a minute on a CPU) ...", flush=True)
+        path = resolved.source.record(args.steps, args.seed).save(args.save)
+        print(f"[view] wrote {path}; play it with: legged view --trajectory {path}")
+        return 0
+    dashboard = Dashboard(DashboardConfig(host=args.host, port=args.port, steps=args.steps, seed=args.seed),
+                          source=resolved.source, trajectory=resolved.trajectory, run_dir=resolved.run_dir)
+    url = dashboard.start()
+    print(f"[view] dashboard at {url} (Ctrl-C stops it)", flush=True)
+    dashboard.wait()
+    return 0
+
+
+def _add_server_options(parser, port: int = 8080) -> None:
+    parser.add_argument("--host", default="127.0.0.1",
+                        help="address to bind (default 127.0.0.1, this machine only; 0.0.0.0 exposes it)")
+    parser.add_argument("--port", type=int, default=port, help="port to bind (0: any free port)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -289,7 +319,23 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--seconds", type=float, default=4.0, help="simulated seconds")
     d.add_argument("--seed", type=int, default=0)
     d.add_argument("--difficulty", type=int, default=1)
+    d.add_argument("--view", action="store_true", help="afterwards, serve the dashboard on the demo's world")
+    _add_server_options(d)
     d.set_defaults(fn=cmd_demo)
+
+    v = sub.add_parser("view", help="the browser dashboard: a run's policy, a task, or a recorded trajectory")
+    v.add_argument("run_dir", nargs="?", default=None,
+                   help="training run: its policy, training curves (live) and checkpoint picker")
+    v.add_argument("--task", default=None, help="task to show (default: the run's, else confined-waypoints)")
+    v.add_argument("--checkpoint", default=None, help="checkpoint file (default: the run's newest)")
+    v.add_argument("--trajectory", default=None, metavar="FILE.npz", help="play a recorded trajectory instead")
+    v.add_argument("--num-envs", type=int, default=1, help="environments side by side (1-16)")
+    v.add_argument("--seed", type=int, default=0, help="seed of the first rollout")
+    v.add_argument("--steps", type=int, default=500, help="control steps per rollout (50 per second)")
+    v.add_argument("--save", default=None, metavar="FILE.npz",
+                   help="record one rollout into FILE.npz and exit instead of serving")
+    _add_server_options(v)
+    v.set_defaults(fn=cmd_view)
     return p
 
 

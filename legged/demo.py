@@ -17,8 +17,15 @@ from legged.robots import GO1
 from legged.worlds import Terrain, generate_world, write_world
 
 
-def run_demo(out: str, seconds: float, seed: int, difficulty: int) -> int:
-    """Write a world, then step the waypoint-following env with zero actions in MJX and natively."""
+def run_demo(out: str, seconds: float, seed: int, difficulty: int, view: dict | None = None) -> int:
+    """Write a world, then step the waypoint-following env with zero actions in MJX and natively.
+
+    With `view` ({'host': ..., 'port': ...}) the dashboard is served on the demo's world afterwards.
+    """
+    if view is not None:
+        from web.source import check_port
+
+        check_port(view["host"], view["port"])  # fail before the demo's minute of work
     world = generate_world(seed, difficulty)
     files = write_world(world, GO1, out)
     print(f"[demo] world seed={seed} difficulty={difficulty}: {world.summary()['size_m']} m, "
@@ -57,4 +64,19 @@ def run_demo(out: str, seconds: float, seed: int, difficulty: int) -> int:
     print(json.dumps(report, indent=2))
     print("[demo] Go1 stands at its default pose under zero action. Open the scene in MuJoCo's viewer with:\n"
           f"       python -m mujoco.viewer --mjcf={files['xml']}")
-    return 0 if np.isfinite(gap) and not report["fell"] else 1
+    ok = np.isfinite(gap) and not report["fell"]
+    if view is not None:
+        _serve(env, seed, view)
+    return 0 if ok else 1
+
+
+def _serve(env: ConfinedEnv, seed: int, view: dict) -> None:
+    """Serve the dashboard on the demo's world (rolling out the default controller) until Ctrl-C."""
+    from web.app import Dashboard, DashboardConfig
+    from web.source import RolloutSource
+
+    dashboard = Dashboard(DashboardConfig(host=view["host"], port=view["port"], seed=seed, steps=250),
+                          source=RolloutSource(env, "confined-waypoints (demo world)"))
+    print(f"[demo] dashboard at {dashboard.start()} (the first rollout compiles for about a minute; Ctrl-C stops)",
+          flush=True)
+    dashboard.wait()

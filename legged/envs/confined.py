@@ -108,6 +108,17 @@ class ConfinedEnv(LeggedEnv):
     def penalty_scales(self) -> PenaltyScales:
         return self.config.penalties
 
+    # ----------------------------------------------------------------- read-outs (dashboard, analysis)
+    def path_of(self, info) -> tuple[jax.Array, jax.Array]:
+        """Planned waypoints (max_waypoints, 6) of the episode's world and how many of them are valid."""
+        return self._paths[info["tile"]], self._path_len[info["tile"]]
+
+    def scan_world_points(self, data) -> jax.Array:
+        """World positions of the floor then the ceiling height-scan points, shape (2, n, 3)."""
+        xy = scan_points_world(data.xpos[self._trunk], self.base_yaw(data), self._scan_points)
+        heights = jnp.stack([self.floor_height(xy), self.ceiling_height(xy)])
+        return jnp.concatenate([jnp.broadcast_to(xy, (2,) + xy.shape), heights[..., None]], -1)
+
     # ----------------------------------------------------------------- hooks
     def _task_reset(self, rng):
         k_tile, k_yaw = jax.random.split(rng)

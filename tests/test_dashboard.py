@@ -1,0 +1,287 @@
+"""The dashboard (web/): geoms -> meshes -> scene nodes, recorded trajectories, early errors, and a real
+browser session (headless Chromium with software WebGL) that renders the scene and plays the timeline."""
+
+import io
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+import time
+from contextlib import redirect_stderr
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+import legged  # noqa: F401  (quiet MJX import)
+from legged.cli import main
+from legged.envs import make
+from legged.envs.confined import ConfinedConfig, ConfinedEnv
+from legged.robots import GO1
+from legged.worlds import Terrain, generate_world
+from web.geometry import box_mesh, capsule_mesh, cylinder_mesh, geom_meshes, sphere_mesh
+from web.trajectory import load_trajectory
+
+ROOT = Path(__file__).resolve().parents[1]
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+STEPS = 50
+"""Control steps recorded for the tests (1 s of simulated time)."""
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def confined_env():
+    """A one-world waypoint task with a planned path (built like the demo: no plan cache involved)."""
+    from planners import HeightMaps, PlannerConfig, plan_path
+
+    world = generate_world(0, 0)
+    plan = plan_path(HeightMaps.from_world(world), world.start, world.goal, GO1, PlannerConfig())
+    return ConfinedEnv(ConfinedConfig(mode="waypoints", num_worlds=1), terrain=Terrain.from_worlds([world]),
+                       paths=[plan.waypoints])
+
+
+@pytest.fixture(scope="module")
+def recorded(confined_env, tmp_path_factory):
+    """A rollout of the default controller (the module's one MJX compilation) and its saved file."""
+    from web.rollout import Recorder
+
+    traj = Recorder(confined_env, "confined-waypoints").record(STEPS, seed=0)
+    return traj, traj.save(tmp_path_factory.mktemp("trajectory") / "rollout.npz")
+
+
+@pytest.fixture(scope="module")
+def server():
+    import viser
+
+    s = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    yield s
+    s.stop()
+
+
+def signed_volume(vertices, faces) -> float:
+    a, b, c = (vertices[faces[:, k]].astype(np.float64) for k in range(3))
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6)
+
+
+def test_primitive_meshes_are_closed_and_face_outward():
+    assert signed_volume(*box_mesh(np.array([0.1, 0.2, 0.3]))) == pytest.approx(0.048)
+    assert signed_volume(*sphere_mesh([0.5, 0.5, 0.5])) == pytest.approx(4 / 3 * np.pi / 8, rel=0.05)
+    assert signed_volume(*sphere_mesh([0.1, 0.2, 0.3])) == pytest.approx(4 / 3 * np.pi * 0.006, rel=0.05)
+    assert signed_volume(*capsule_mesh(0.1, 0.2)) == pytest.approx(np.pi * 0.01 * 0.4 + 4 / 3 * np.pi * 1e-3, rel=0.05)
+    assert signed_volume(*cylinder_mesh(0.1, 0.2)) == pytest.approx(np.pi * 0.01 * 0.4, rel=0.05)
+
+
+def test_height_field_mesh_matches_the_model(confined_env):
+    model = confined_env.mj_model
+    meshes = geom_meshes(model)
+    for name in ("floor", "ceiling"):
+        mesh = meshes[model.geom(name).id]
+        h = model.geom_dataid[mesh.geom]
+        nrow, ncol = model.hfield_nrow[h], model.hfield_ncol[h]
+        sx, sy, sz, _ = model.hfield_size[h]
+        top = mesh.vertices[: nrow * ncol].reshape(nrow, ncol, 3)
+        heights = model.hfield_data[model.hfield_adr[h]: model.hfield_adr[h] + nrow * ncol].reshape(nrow, ncol)
+        np.testing.assert_allclose(top[..., 2], sz * heights, atol=1e-5)
+        np.testing.assert_allclose(top[0, 0, :2], [-sx, -sy], atol=1e-5)
+        np.testing.assert_allclose(top[-1, -1, :2], [sx, sy], atol=1e-5)
+        assert signed_volume(mesh.vertices, mesh.faces) > 0  # closed by side walls and a bottom, facing out
+    # Placed at the geom's pose, surface vertices lie where MuJoCo's own ray casts meet the height fields.
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    terrain_only = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+    for name, direction in (("floor", -1.0), ("ceiling", 1.0)):
+        geom = model.geom(name).id
+        mesh = meshes[geom]
+        h = model.geom_dataid[geom]
+        picks = np.random.default_rng(0).integers(0, model.hfield_nrow[h] * model.hfield_ncol[h], 20)
+        world = data.geom_xpos[geom] + mesh.vertices[picks].astype(np.float64) @ data.geom_xmat[geom].reshape(3, 3).T
+        for point in world:
+            start = point - np.array([0.0, 0.0, 0.01 * direction])
+            hit = mujoco.mj_ray(model, data, start, np.array([0.0, 0.0, direction]), terrain_only, 1, -1,
+                                np.zeros(1, np.int32))
+            assert hit == pytest.approx(0.01, abs=2e-4), (name, point)
+
+
+@pytest.mark.parametrize("scene", ["confined", "go1-flat"])
+@pytest.mark.parametrize("num_envs", [1, 2])
+def test_every_geom_becomes_a_scene_node(scene, num_envs, confined_env, server):
+    from web.scene import SceneView, static_bodies
+
+    model = confined_env.mj_model if scene == "confined" else make("go1-flat").mj_model
+    server.scene.reset()
+    view = SceneView(server.scene, model, np.zeros((num_envs, 3)))
+    static = static_bodies(model)[model.geom_bodyid]
+    assert len(view.geom_nodes) == static.sum() + num_envs * (~static).sum()
+    if num_envs == 1:
+        assert len(view.geom_nodes) == model.ngeom
+        assert sorted(g for _, g, _ in view.geom_nodes) == list(range(model.ngeom))
+    for mesh in view.meshes:
+        assert len(mesh.faces) and mesh.faces.max() < len(mesh.vertices) and np.isfinite(mesh.vertices).all()
+    ceiling = view.ceiling_nodes()
+    if scene == "confined":
+        assert len(ceiling) == 1 and ceiling[0].opacity is not None and ceiling[0].opacity <= 0.35
+        view.set_ceiling(False, 0.2)
+        assert not ceiling[0].visible
+    else:
+        assert ceiling == []
+        floor = view.meshes[model.geom("floor").id]
+        assert floor.kind == "plane" and np.ptp(floor.vertices[:, 0]) == pytest.approx(20.0)  # infinite -> 20 m
+
+
+def test_recorded_trajectory_round_trips(recorded):
+    traj, path = recorded
+    loaded = load_trajectory(path)
+    assert loaded.num_frames == STEPS + 1 and loaded.num_envs == 1
+    assert loaded.model.ngeom == traj.model.ngeom and loaded.model.nq == traj.model.nq
+    for name in ("qpos", "reward", "done", "offsets", "paths", "path_len", "waypoint", "goal", "floor_scan",
+                 "ceiling_scan"):
+        np.testing.assert_array_equal(getattr(loaded, name), getattr(traj, name), err_msg=name)
+    assert loaded.metrics.keys() == traj.metrics.keys() and loaded.info == traj.info
+    assert loaded.info["policy"] == "default controller"
+    # Go1 stands under the default controller; scans lie on the floor and ceiling around it.
+    assert 0.2 < loaded.qpos[-1, 0, 2] < 0.35
+    assert np.all(loaded.ceiling_scan[..., 2] > loaded.floor_scan[..., 2])
+    assert np.linalg.norm(loaded.floor_scan[0, 0, :, :2].mean(0) - loaded.qpos[0, 0, :2]) < 1.0
+    assert loaded.path_len[0] >= 2 and np.allclose(loaded.paths[0, 0, :2], loaded.qpos[0, 0, :2], atol=0.05)
+
+
+def test_trajectory_file_errors(tmp_path):
+    with pytest.raises(FileNotFoundError, match="not found"):
+        load_trajectory(tmp_path / "missing.npz")
+    np.savez(tmp_path / "other.npz", x=np.zeros(3))
+    with pytest.raises(ValueError, match="not a legged trajectory"):
+        load_trajectory(tmp_path / "other.npz")
+
+
+def test_training_curves_and_checkpoints_follow_a_running_training(tmp_path, server):
+    from web.panels import CheckpointPicker, TrainingCurves, read_metrics
+
+    metrics = tmp_path / "metrics.jsonl"
+    metrics.write_text('{"step": 10, "episode_return": null}\n{"step": 20, "episode_return": 1.5}\n{"step": 3')
+    assert [r["step"] for r in read_metrics(metrics)] == [10, 20]  # the line being written is skipped
+    curves = TrainingCurves(server.gui, metrics)
+    assert curves.refresh() is False  # unchanged file
+    with open(metrics, "a") as f:
+        f.write('0, "episode_return": 2.5, "loss": 0.1}\n')
+    assert curves.refresh() is True
+    assert "3 records, last at step 30" in curves.status.content
+    assert set(curves.key.options) >= {"episode_return", "loss"}
+    np.testing.assert_array_equal(curves._plot.handle.data[1], [1.5, 2.5])  # null returns are left out
+
+    checkpoints = [tmp_path / "step_000000000010.pt"]
+    loaded = []
+    picker = CheckpointPicker(server.gui, lambda: list(checkpoints), loaded.append)
+    assert picker.dropdown.value == "step_000000000010.pt"
+    checkpoints.append(tmp_path / "step_000000000020.pt")
+    assert picker.refresh() and picker.dropdown.value == "step_000000000020.pt"  # follows the newest
+    picker._load()
+    assert loaded == [checkpoints[1]]
+
+
+def _view_error(*args) -> str:
+    err = io.StringIO()
+    with redirect_stderr(err):
+        assert main(["view", *args]) == 2
+    return err.getvalue()
+
+
+def test_view_errors_name_the_cause_before_long_work(tmp_path):
+    port = free_port()
+    assert "run directory not found" in _view_error(str(tmp_path / "nope"), "--port", str(port))
+    assert "unknown task 'nope'" in _view_error("--task", "nope", "--port", str(port))
+    run = tmp_path / "run"
+    (run / "checkpoints").mkdir(parents=True)
+    shutil.copy(ROOT / "assets/runs/go1-flat-rsl-cpu2/config.yaml", run / "config.yaml")
+    (run / "checkpoints" / "step_000000001000.pt").write_text("not a checkpoint")
+    assert "cannot be read" in _view_error(str(run), "--port", str(port))
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        taken = busy.getsockname()[1]
+        assert f"port {taken} on 127.0.0.1 is in use" in _view_error("--port", str(taken))
+
+
+class Output:
+    """Reads a process's output on a thread (so its pipe never fills) and waits for a line."""
+
+    def __init__(self, proc: subprocess.Popen):
+        self.lines: list[str] = []
+        self._thread = threading.Thread(target=lambda: self.lines.extend(iter(proc.stdout.readline, "")),
+                                        daemon=True)
+        self._thread.start()
+        self.proc = proc
+
+    def wait_for(self, text: str, timeout: float) -> str:
+        def found():
+            hits = [line for line in self.lines if text in line]
+            if not hits and self.proc.poll() is not None:
+                raise AssertionError(f"the process exited ({self.proc.returncode}):\n{''.join(self.lines)}")
+            return hits[0] if hits else None
+
+        return _poll(found, timeout, repr(text))
+
+
+def _canvas_stats(png: bytes) -> tuple[float, int]:
+    import imageio.v3 as iio
+
+    pixels = iio.imread(png)[..., :3].reshape(-1, 3)
+    return float(pixels.std(axis=0).mean()), len(np.unique(pixels // 16, axis=0))
+
+
+def _poll(check, timeout: float, what: str):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        result = check()
+        if result:
+            return result
+        time.sleep(0.5)
+    raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (CI installs it: .ci/install)")
+def test_dashboard_in_headless_chromium(recorded, tmp_path):
+    playwright = pytest.importorskip("playwright.sync_api", reason="playwright is a dev dependency")
+    _, path = recorded
+    port = free_port()
+    command = [sys.executable, "-m", "legged.cli", "view", "--trajectory", str(path), "--port", str(port)]
+    proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    try:
+        line = Output(proc).wait_for("[view] dashboard at", 120)
+        assert f"http://127.0.0.1:{port}" in line
+        with playwright.sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=[
+                "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox"])
+            page = browser.new_page(viewport={"width": 1024, "height": 700})
+            page.goto(f"http://127.0.0.1:{port}")
+            canvas = page.locator("canvas[data-engine]")
+            canvas.wait_for(timeout=60_000)
+            page.get_by_text("default controller").first.wait_for(timeout=60_000)  # the trajectory is shown
+
+            def drawn():
+                shot = canvas.screenshot(path=str(tmp_path / "dashboard.png"))
+                spread, colours = _canvas_stats(shot)
+                return (spread, colours) if spread > 20 and colours >= 8 else None
+
+            spread, colours = _poll(drawn, 90, "the 3D scene to be drawn")
+            assert spread > 20 and colours >= 8  # not a blank or uniform canvas
+
+            label = page.locator("label", has_text="Timeline")
+            slider = page.locator(f"[id='{label.get_attribute('for')}'] [role=slider]")
+            start = int(slider.get_attribute("aria-valuenow"))
+            assert start == 0 and int(slider.get_attribute("aria-valuemax")) == STEPS
+            page.get_by_role("button", name="Play").click()
+            _poll(lambda: int(slider.get_attribute("aria-valuenow")) > start, 60, "the timeline to advance")
+            page.get_by_role("button", name="Pause").click()
+            browser.close()
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)

@@ -1,0 +1,112 @@
+"""Switchable overlays of a trajectory: planned path and waypoints, current target, height-scan points
+(floor and ceiling), contact points and the goal."""
+
+from __future__ import annotations
+
+import numpy as np
+import viser
+
+from web.trajectory import Trajectory
+
+OVERLAYS = {"path": "planned path and waypoints", "target": "current target waypoint",
+            "floor_scan": "floor height scan", "ceiling_scan": "ceiling height scan",
+            "contacts": "contact points", "goal": "goal"}
+"""Overlay name -> what it shows (the dashboard's checkbox labels)."""
+
+COLOURS = {"path": (40, 120, 255), "target": (255, 140, 0), "floor_scan": (30, 190, 90),
+           "ceiling_scan": (220, 60, 200), "contacts": (230, 20, 20), "goal": (20, 200, 60)}
+"""Overlay colours (RGB)."""
+
+
+def quat_from_rpy(rpy: np.ndarray) -> np.ndarray:
+    """Quaternions (w, x, y, z) of roll, pitch, yaw angles (..., 3) (rotation z-y-x, as the planner's poses)."""
+    half = np.asarray(rpy, np.float64) / 2
+    cr, cp, cy = np.cos(half[..., 0]), np.cos(half[..., 1]), np.cos(half[..., 2])
+    sr, sp, sy = np.sin(half[..., 0]), np.sin(half[..., 1]), np.sin(half[..., 2])
+    return np.stack([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
+                     cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy], -1)
+
+
+class Overlays:
+    """Scene nodes of every overlay of one trajectory; `update(frame)` moves the per-frame ones."""
+
+    def __init__(self, scene: viser.SceneApi, traj: Trajectory, shown: dict[str, bool] | None = None):
+        self.scene, self.traj = scene, traj
+        self.shown = {name: True for name in OVERLAYS} if shown is None else dict(shown)
+        self.nodes: dict[str, list] = {name: [] for name in OVERLAYS}
+        self._empty: set = set()
+        for env in range(traj.num_envs):
+            self._add_static(env)
+            self._add_dynamic(env)
+        self.nodes["contacts"].append(self._points("/overlays/contacts", np.zeros((1, 3)), "contacts", 0.03))
+
+    @property
+    def available(self) -> dict[str, bool]:
+        """Which overlays this trajectory has data for."""
+        t = self.traj
+        return {"path": t.paths is not None, "target": t.waypoint is not None, "floor_scan": t.floor_scan is not None,
+                "ceiling_scan": t.ceiling_scan is not None, "contacts": True, "goal": t.goal is not None}
+
+    def _points(self, name, points, kind, size):
+        return self.scene.add_point_cloud(name, np.asarray(points, np.float32), COLOURS[kind], point_size=size,
+                                          point_shape="circle", precision="float32", visible=self.shown[kind])
+
+    def _add_static(self, env: int) -> None:
+        t, offset, root = self.traj, self.traj.offsets[env], f"/overlays/env{env}"
+        if t.paths is not None:
+            path = t.paths[env, : max(int(t.path_len[env]), 1)].astype(np.float64)
+            xyz = path[:, :3] + offset
+            if len(xyz) > 1:
+                segments = np.stack([xyz[:-1], xyz[1:]], 1)
+                self.nodes["path"].append(self.scene.add_line_segments(
+                    f"{root}/path/line", segments, COLOURS["path"], thickness=0.01, visible=self.shown["path"]))
+            self.nodes["path"].append(self._points(f"{root}/path/waypoints", xyz, "path", 0.035))
+            self.nodes["path"].append(self.scene.add_batched_axes(
+                f"{root}/path/poses", quat_from_rpy(path[:, 3:6]), xyz, axes_length=0.12, axes_radius=0.006,
+                visible=self.shown["path"]))
+        if t.goal is not None:
+            self.nodes["goal"].append(self.scene.add_icosphere(
+                f"{root}/goal", radius=0.08, color=COLOURS["goal"], opacity=0.8,
+                position=t.goal[env].astype(np.float64) + offset, visible=self.shown["goal"]))
+
+    def _add_dynamic(self, env: int) -> None:
+        t, root = self.traj, f"/overlays/env{env}"
+        if t.waypoint is not None and t.paths is not None:
+            self.nodes["target"].append(self.scene.add_icosphere(
+                f"{root}/target", radius=0.06, color=COLOURS["target"], visible=self.shown["target"]))
+        for kind in ("floor_scan", "ceiling_scan"):
+            scan = getattr(t, kind)
+            if scan is not None:
+                self.nodes[kind].append(self._points(f"{root}/{kind}", scan[0, env] + t.offsets[env], kind, 0.015))
+
+    def update(self, frame: int, contacts: np.ndarray) -> None:
+        """Move the per-frame overlays to `frame`; `contacts` are world contact points (k, 3) of all envs."""
+        t = self.traj
+        for env in range(t.num_envs):
+            offset = t.offsets[env]
+            if self.nodes["target"]:
+                index = min(int(t.waypoint[frame, env]), int(t.path_len[env]) - 1)
+                self.nodes["target"][env].position = t.paths[env, index, :3].astype(np.float64) + offset
+            for kind in ("floor_scan", "ceiling_scan"):
+                if self.nodes[kind]:
+                    self.nodes[kind][env].points = (getattr(t, kind)[frame, env] + offset).astype(np.float32)
+        handle = self.nodes["contacts"][0]
+        if len(contacts):
+            handle.points = np.asarray(contacts, np.float32)
+            self._empty.discard("contacts")
+        else:
+            self._empty.add("contacts")
+        handle.visible = self.shown["contacts"] and "contacts" not in self._empty
+
+    def set_visible(self, name: str, visible: bool) -> None:
+        """Switch one overlay on or off."""
+        self.shown[name] = visible
+        for handle in self.nodes[name]:
+            handle.visible = visible and name not in self._empty
+
+    def remove(self) -> None:
+        """Remove every overlay node (before showing another trajectory)."""
+        for handles in self.nodes.values():
+            for handle in handles:
+                handle.remove()
+        self.nodes = {name: [] for name in OVERLAYS}

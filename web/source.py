@@ -1,0 +1,176 @@
+"""What the dashboard shows, resolved from `legged view` arguments with every check done before long work.
+
+Checks run cheapest first: numbers, the port, the trajectory file, the run directory and its config,
+the task name, the checkpoint; only then is the environment built (and compiled, on the first rollout).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import errno
+import socket
+from pathlib import Path
+from typing import Callable
+
+from web.rollout import Recorder, RecorderConfig
+from web.trajectory import Trajectory, load_trajectory
+
+DEFAULT_TASK = "confined-waypoints"
+"""Task shown when neither a run directory nor a task is named."""
+
+
+@dataclasses.dataclass(frozen=True)
+class ViewRequest:
+    """The arguments of `legged view`."""
+
+    run_dir: str | None = None
+    """Training run whose policy, curves and checkpoints are shown."""
+    task: str | None = None
+    """Task to show (default: the run's task, else confined-waypoints)."""
+    checkpoint: str | None = None
+    """Checkpoint file (default: the run's newest, if it has one)."""
+    trajectory: str | None = None
+    """Recorded trajectory (.npz) to play instead of rolling out."""
+    num_envs: int = 1
+    """Environments side by side."""
+    seed: int = 0
+    """Seed of the first rollout."""
+    steps: int = 500
+    """Control steps per rollout."""
+    host: str = "127.0.0.1"
+    """Address the server binds to."""
+    port: int | None = 8080
+    """Port the server binds to (0: any free port; None: no server, e.g. when only recording)."""
+
+
+def check_port(host: str, port: int) -> None:
+    """OSError naming the address if nothing can listen on host:port now (the same socket options as viser)."""
+    if not 0 <= port <= 65535:
+        raise ValueError(f"--port must be between 0 and 65535, got {port}")
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind((host, port))
+        except OSError as exc:
+            reason = "is in use" if exc.errno == errno.EADDRINUSE else f"cannot be bound ({exc.strerror})"
+            raise OSError(f"port {port} on {host} {reason}; choose another with --port") from None
+
+
+class RolloutSource:
+    """An environment, its recorder and the current policy (or the default controller): what is re-recorded."""
+
+    def __init__(self, env, task: str, recorder: RecorderConfig = RecorderConfig(), policy=None,
+                 run_dir: Path | None = None):
+        self.env, self.task, self.run_dir = env, task, run_dir
+        self.recorder = Recorder(env, task, recorder)
+        self.policy = policy
+
+    @property
+    def policy_name(self) -> str:
+        """The checkpoint's file name, or 'default controller'."""
+        return "default controller" if self.policy is None else self.policy.checkpoint.name
+
+    def checkpoints(self) -> list[Path]:
+        """Checkpoints of the run directory, oldest first (none without a run)."""
+        if self.run_dir is None:
+            return []
+        from policies.run_dir import RunDir
+
+        return RunDir(self.run_dir).checkpoints()
+
+    def load_checkpoint(self, path: Path) -> None:
+        """Swap the policy for a checkpoint of the run (errors leave the current one in place)."""
+        from policies.policy_io import load_policy
+        from policies.run_dir import check_compatible
+
+        if self.run_dir is None:
+            raise ValueError("checkpoints can be loaded only when a run directory is shown")
+        policy, _ = load_policy(self.run_dir, path)
+        check_compatible(policy.obs_sizes, policy.num_actions, self.env, path)
+        self.policy = policy
+
+    def record(self, steps: int, seed: int, progress: Callable[[int, int], None] | None = None) -> Trajectory:
+        """Roll out the current policy (or the default controller)."""
+        act = None if self.policy is None else self.policy.act
+        info = {"policy": self.policy_name}
+        if self.policy is not None:
+            info.update(checkpoint=str(self.policy.checkpoint), trained_steps=int(self.policy.step))
+        if self.run_dir is not None:
+            info["run_dir"] = str(self.run_dir)
+        return self.recorder.record(steps, seed, act, info, progress)
+
+
+@dataclasses.dataclass
+class Resolved:
+    """What `resolve` found: a trajectory to play or a source to roll out, and the run directory if any."""
+
+    source: RolloutSource | None
+    """Rolls out the environment (None when playing a recorded trajectory)."""
+    trajectory: Trajectory | None
+    """The recorded trajectory (None when rolling out)."""
+    run_dir: Path | None
+    """Run directory for training curves and the checkpoint picker."""
+
+
+def _run_dir_of(request: ViewRequest) -> Path | None:
+    if request.run_dir is None and request.checkpoint is not None:
+        parent = Path(request.checkpoint).resolve().parent.parent  # RUN/checkpoints/step_*.pt
+        if not (parent / "config.yaml").is_file():
+            raise ValueError(f"--checkpoint {request.checkpoint}: name its run directory too (RUN_DIR holds "
+                             "config.yaml and checkpoints/)")
+        return parent
+    if request.run_dir is None:
+        return None
+    path = Path(request.run_dir)
+    if not path.exists():
+        raise FileNotFoundError(f"run directory not found: {path}")
+    if not path.is_dir():
+        raise NotADirectoryError(f"not a run directory: {path}")
+    return path
+
+
+def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolved:
+    """Check the request and build what it asks for (the environment last)."""
+    if not 1 <= request.num_envs <= 16:
+        raise ValueError(f"--num-envs must be between 1 and 16, got {request.num_envs}")
+    if request.steps < 1:
+        raise ValueError(f"--steps must be >= 1, got {request.steps}")
+    if request.port is not None:
+        check_port(request.host, request.port)
+    run_dir = _run_dir_of(request)
+    config = None
+    if run_dir is not None:
+        from policies.run_dir import RunDir
+
+        config = RunDir(run_dir).load_config()
+    if request.trajectory is not None:
+        return Resolved(source=None, trajectory=load_trajectory(request.trajectory), run_dir=run_dir)
+    from legged.envs import default_config
+
+    task = request.task or (config.task if config is not None else DEFAULT_TASK)
+    if config is not None and task != config.task:
+        raise ValueError(f"--task {task} differs from the task of run {run_dir} ({config.task})")
+    default_config(task)  # unknown task -> error naming the known ones
+    policy = None
+    if run_dir is not None and (request.checkpoint is not None or _has_checkpoints(run_dir)):
+        from policies.policy_io import load_policy
+
+        policy, _ = load_policy(run_dir, request.checkpoint)
+        log(f"[view] policy {policy.checkpoint} ({policy.backend}, {policy.step} env steps)")
+    log(f"[view] building the {task} environment ...")
+    from planners.planned_env import make_planned_env
+
+    env = make_planned_env(task, config=config.env if config is not None else None, progress=False)
+    if policy is not None:
+        from policies.run_dir import check_compatible
+
+        check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+    source = RolloutSource(env, task, RecorderConfig(num_envs=request.num_envs), policy, run_dir)
+    return Resolved(source=source, trajectory=None, run_dir=run_dir)
+
+
+def _has_checkpoints(run_dir: Path) -> bool:
+    from policies.run_dir import RunDir
+
+    return bool(RunDir(run_dir).checkpoints())
