@@ -203,6 +203,7 @@ def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, prog
                 learning_rate_schedule="ADAPTIVE_KL", desired_kl=ppo.desired_kl, entropy_cost=ppo.entropy_coef,
                 discounting=ppo.gamma, gae_lambda=ppo.lam,
                 clipping_epsilon=ppo.clip_param, max_grad_norm=ppo.max_grad_norm, normalize_observations=True,
+                normalize_observations_std_eps=ppo.obs_std_floor ** 2,
                 network_factory=network_factory(config), seed=config.seed + start_step, num_evals=reports + 1,
                 run_evals=False, log_training_metrics=True, progress_fn=on_progress, policy_params_fn=on_params,
                 wrap_env_fn=wrap_for_training,

@@ -52,6 +52,8 @@ class PPOConfig:
     """Initial standard deviation of the Gaussian policy."""
     obs_normalization: bool = True
     """Running mean/std normalisation of observations (rsl-rl backend; Brax PPO always normalises)."""
+    obs_std_floor: float = 0.01
+    """Brax backend: least std an observation is divided by (a rare contact force / 1e-6 made the value diverge)."""
 
 
 @dataclasses.dataclass(frozen=True)

@@ -6,6 +6,7 @@ object or batch size would compile again (about a minute on 2 CPU cores).
 
 
 import jax
+import numpy as np
 import pytest
 import torch
 
@@ -183,6 +184,9 @@ def test_brax_backend_tiny_run_resume_and_export(tiny_env, tmp_path, monkeypatch
     updates = 5 * 2  # one iteration: 5 epochs x 2 minibatches
     assert _adam_count(saved[0]) == 2 * updates  # two iterations before the kill
     assert _adam_count(saved[1]) == 3 * updates  # Adam's moments continued, not restarted
+    normalizer = load_checkpoint(run.checkpoints()[-1])["params"][0]
+    # Constant features (the nominal dynamics parameters) are divided by the 0.01 floor, not by 1e-6.
+    assert float(np.min(normalizer.std["privileged_state"])) >= 0.0099
     policy, _ = load_policy(run_dir)
     assert policy.backend == "brax" and policy.step == 120
     assert export_onnx(policy, tmp_path / "brax.onnx")["max_abs_diff"] <= 1e-4
