@@ -192,6 +192,24 @@ def cmd_export(args) -> int:
     return 0
 
 
+def cmd_camera(args) -> int:
+    from legged.soccer import build_soccer_scene
+    from legged.soccer.states import match_state, scene_config
+    from legged.soccer.vision import write_camera_images
+
+    config = scene_config(args.task)  # fails on unknown names before the scene is built
+    model = build_soccer_scene(config)
+    report = write_camera_images(model, match_state(model, config, args.seed), args.out)
+    report = dict(report, task=args.task, seed=args.seed)
+    if args.json:
+        print(json.dumps(report))
+    else:
+        print(f"[camera] {args.task} seed {args.seed}: segmentation agreement with MuJoCo's renderer "
+              f"{report['segmentation']:.4f}, median depth error {report['depth_median_abs_error']:.2e} m; "
+              f"wrote {len(report['files']['ray'])} agent(s) x 2 images to {args.out}")
+    return 0
+
+
 def cmd_tasks(args) -> int:
     from legged.envs import TASKS
 
@@ -310,6 +328,13 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--checkpoint", default=None, help="a checkpoint file (default: the run's newest)")
     ex.add_argument("--out", default=None, help="output file (default RUN_DIR/policy.onnx)")
     ex.set_defaults(fn=cmd_export)
+
+    c = sub.add_parser("camera", help="each soccer player's head camera: the JAX ray renderer beside MuJoCo's")
+    c.add_argument("--task", default="soccer-1v1-vision", help="soccer-1v1, soccer-2v2 or soccer-1v1-vision")
+    c.add_argument("--seed", type=int, default=0, help="game state: 0 is the kick-off, others move robots and ball")
+    c.add_argument("--out", default="camera", help="folder for agent<i>_ray.png and agent<i>_native.png")
+    c.add_argument("--json", action="store_true", help="print the agreement figures as JSON")
+    c.set_defaults(fn=cmd_camera)
 
     t = sub.add_parser("tasks", help="list the registered tasks")
     t.set_defaults(fn=cmd_tasks)

@@ -170,3 +170,36 @@ def test_agrees_with_mujocos_renderer_and_writes_images(soccer, tmp_path):
     assert all(c["segmentation"] >= SEGMENTATION_THRESHOLD for c in figures["per_camera"])
     assert figures["depth_median_abs_error"] < 0.01
     assert figures["depth_within_5cm"] > 0.95
+
+
+def test_match_states_are_seeded_and_start_at_kickoff():
+    from legged.soccer.states import match_state, scene_config
+
+    config = scene_config("soccer-1v1-vision")
+    model = build_soccer_scene(config)
+    layout = SoccerLayout.from_model(model)
+    ball = slice(layout.ball_qpos_adr, layout.ball_qpos_adr + 3)
+    kickoff, moved, again = (match_state(model, config, seed) for seed in (0, 3, 3))
+    assert np.allclose(kickoff.qpos[ball], [0.0, 0.0, config.ball_radius])
+    assert np.array_equal(moved.qpos, again.qpos) and not np.allclose(moved.qpos[ball][:2], 0.0)
+    assert np.all(np.abs(moved.qpos[ball][:2]) <= [config.field_length / 2, config.field_width / 2])
+    with pytest.raises(ValueError, match="soccer tasks: soccer-1v1, soccer-1v1-vision, soccer-2v2"):
+        scene_config("soccer-3v3")
+
+
+def test_camera_command_writes_both_images_per_agent(tmp_path, capsys):
+    import json
+
+    from legged.cli import main
+
+    try:
+        code = main(["camera", "--task", "soccer-1v1-vision", "--seed", "3", "--out", str(tmp_path), "--json"])
+    except RuntimeError as exc:
+        if "OpenGL renderer is unavailable" in str(exc):
+            pytest.skip(f"no native rendering here: {exc}")
+        raise
+    assert code == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["segmentation"] >= SEGMENTATION_THRESHOLD and report["seed"] == 3
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == [
+        "agent0_native.png", "agent0_ray.png", "agent1_native.png", "agent1_ray.png"]
