@@ -15,22 +15,21 @@ and a resumed run starts from them instead of fresh ones.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import pickle
 import time
 
-import contextlib
-
 import jax
-import jax.numpy as jnp
 import numpy as np
-from brax.envs.wrappers.training import EpisodeWrapper, VmapWrapper
 from brax.envs.base import Wrapper
+from brax.envs.wrappers.training import EpisodeWrapper, VmapWrapper
 from brax.training.agents.ppo import networks as ppo_networks
 from brax.training.agents.ppo import train as brax_ppo
 from tqdm import tqdm
 
+from legged.envs.vector import select_envs
 from policies.config import ConfigError, TrainConfig
 from policies.run_dir import RunDir, RunDirError, check_compatible
 
@@ -67,14 +66,9 @@ class FullResetWrapper(Wrapper):
             return new.replace(info={**new.info, **{k: state.info[k] for k in _EPISODE_KEYS},
                                      "reset_key": split[:, 1]})
 
-        def pick(a, b):
-            return jnp.where(done.reshape(done.shape + (1,) * (a.ndim - 1)), a, b)
-
         kept = state.replace(info={**state.info, "reset_key": split[:, 1]})
         new = jax.lax.cond(done.any(), fresh, lambda: kept)
-        merged = jax.tree_util.tree_map(pick, new.replace(done=state.done, reward=state.reward,
-                                                          metrics=state.metrics), kept)
-        return merged
+        return select_envs(done, new.replace(done=state.done, reward=state.reward, metrics=state.metrics), kept)
 
 
 def wrap_for_training(env, episode_length: int, action_repeat: int, randomization_fn=None):
@@ -153,7 +147,8 @@ def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, prog
         start_step, restore = payload["step"], payload["params"]
         tap.restore = payload.get("optimizer_state")
         if start_step >= config.timesteps:
-            return run.metrics()[-1] if run.metrics() else {}
+            records = run.metrics()
+            return records[-1] if records else {}
     per_iteration = config.num_envs * ppo.num_steps_per_env
     per_report = per_iteration * config.checkpoint_every
     remaining = max(config.timesteps - start_step, per_iteration)

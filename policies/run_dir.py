@@ -88,10 +88,20 @@ class RunDir:
             writer.flush()
 
     def metrics(self) -> list[dict]:
-        """All metrics records so far."""
-        if not self.metrics_path.is_file():
+        """All metrics records so far; a line cut short (a killed run, or one being written) is skipped."""
+        try:
+            lines = self.metrics_path.read_text().splitlines()
+        except FileNotFoundError:
             return []
-        return [json.loads(line) for line in self.metrics_path.read_text().splitlines() if line.strip()]
+        records = []
+        for line in lines:
+            try:
+                record = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            if isinstance(record, dict) and isinstance(record.get("step"), (int, float)):
+                records.append(record)
+        return records
 
     def checkpoint_path(self, step: int, suffix: str) -> Path:
         return self.checkpoint_dir / f"step_{step:012d}.{suffix}"

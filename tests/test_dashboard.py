@@ -162,12 +162,13 @@ def test_trajectory_file_errors(tmp_path):
 
 
 def test_training_curves_and_checkpoints_follow_a_running_training(tmp_path, server):
-    from web.panels import CheckpointPicker, TrainingCurves, read_metrics
+    from policies.run_dir import RunDir
+    from web.panels import CheckpointPicker, TrainingCurves
 
     metrics = tmp_path / "metrics.jsonl"
     metrics.write_text('{"step": 10, "episode_return": null}\n{"step": 20, "episode_return": 1.5}\n{"step": 3')
-    assert [r["step"] for r in read_metrics(metrics)] == [10, 20]  # the line being written is skipped
-    curves = TrainingCurves(server.gui, metrics)
+    assert [r["step"] for r in RunDir(tmp_path).metrics()] == [10, 20]  # the line being written is skipped
+    curves = TrainingCurves(server.gui, RunDir(tmp_path))
     assert curves.refresh() is False  # unchanged file
     with open(metrics, "a") as f:
         f.write('0, "episode_return": 2.5, "loss": 0.1}\n')

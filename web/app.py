@@ -145,7 +145,7 @@ class Dashboard:
             with tabs.add_tab("Training", viser.Icon.TRENDING_UP):
                 from policies.run_dir import RunDir
 
-                self.curves = TrainingCurves(gui, RunDir(self.run_dir).metrics_path)
+                self.curves = TrainingCurves(gui, RunDir(self.run_dir))
                 if self.source is not None:
                     self.picker = CheckpointPicker(gui, self.source.checkpoints, self._load_checkpoint,
                                                    self.source.policy.checkpoint if self.source.policy else None)

@@ -11,6 +11,8 @@ import dataclasses
 import mujoco
 import numpy as np
 
+from legged.sensors.raycam import pixel_directions
+
 COLOUR_STOPS = np.array([[255, 235, 80], [245, 120, 40], [200, 40, 80], [90, 30, 130], [20, 20, 60]], np.float64)
 """Near-to-far colours of the depth map (yellow, orange, red, purple, dark blue)."""
 
@@ -23,8 +25,8 @@ class DepthCameraConfig:
     """Image width, pixels (one ray each)."""
     height: int = 36
     """Image height, pixels."""
-    fov_deg: float = 90.0
-    """Horizontal field of view, degrees (pixels are square)."""
+    fovy_deg: float = 74.0
+    """Vertical field of view, degrees (square pixels; 74 at 48 x 36 is about 90 horizontally)."""
     max_depth: float = 3.0
     """Distances beyond this (and misses) are drawn as the farthest colour, metres."""
     body: str | None = None
@@ -56,15 +58,13 @@ class DepthCamera:
         # See every group that holds some geom of the rest of the scene; groups only the robot uses are skipped.
         self.geomgroup = np.zeros(6, np.uint8)
         self.geomgroup[np.unique(model.geom_group[~own])] = 1
-        half_w = np.tan(np.radians(config.fov_deg) / 2)
-        half_h = half_w * config.height / config.width
-        u = np.linspace(half_w, -half_w, config.width)  # image columns from left (+y) to right (-y)
-        v = np.linspace(half_h, -half_h, config.height)  # rows from top to bottom
-        gu, gv = np.meshgrid(u, v)
-        dirs = np.stack([np.ones_like(gu), gu, gv], -1).reshape(-1, 3)
+        # The shared pinhole model (camera frame: x right, y up, looking along -z) turned into the body
+        # frame (x forward, y left, z up).
+        cam = pixel_directions(config.fovy_deg, config.width, config.height).astype(np.float64)
+        dirs = np.stack([-cam[:, 2], -cam[:, 0], cam[:, 1]], -1)
         pitch = np.radians(config.pitch_deg)
         tilt = np.array([[np.cos(pitch), 0, np.sin(pitch)], [0, 1, 0], [-np.sin(pitch), 0, np.cos(pitch)]])
-        self._dirs = (dirs / np.linalg.norm(dirs, axis=1, keepdims=True)) @ tilt.T
+        self._dirs = dirs @ tilt.T
         self._geomid = np.zeros(len(self._dirs), np.int32)
         self._dist = np.zeros(len(self._dirs), np.float64)
 

@@ -12,8 +12,7 @@ import dataclasses
 import mujoco
 import numpy as np
 
-DEFAULT_RGBA = (0.5, 0.5, 0.5, 1.0)
-"""MuJoCo's default geom colour: a geom with it takes its material's colour when it has one."""
+from legged.sensors.raycam import drawn_rgba
 
 GEOM_KINDS = {int(mujoco.mjtGeom.mjGEOM_PLANE): "plane", int(mujoco.mjtGeom.mjGEOM_HFIELD): "hfield",
               int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere", int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule",
@@ -158,10 +157,9 @@ def _texture_mean(model: mujoco.MjModel, texture: int) -> np.ndarray:
 def geom_rgba(model: mujoco.MjModel, geom: int) -> tuple[float, float, float, float]:
     """A geom's colour: its own rgba, or (when that is the default) its material's, tinted by the mean
     colour of the material's texture when it has one."""
-    rgba = np.asarray(model.geom_rgba[geom], np.float64)
-    mat = int(model.geom_matid[geom])
-    if mat >= 0 and np.allclose(rgba, DEFAULT_RGBA):
-        rgba = np.asarray(model.mat_rgba[mat], np.float64).copy()
+    rgba, mat = drawn_rgba(model, geom)
+    rgba = np.asarray(rgba, np.float64)
+    if mat >= 0:
         texture = int(model.mat_texid[mat, int(mujoco.mjtTextureRole.mjTEXROLE_RGB)])
         if texture >= 0:
             rgba[:3] *= _texture_mean(model, texture)

@@ -3,7 +3,6 @@ run directory (re-read while it trains), a checkpoint picker and an image panel.
 
 from __future__ import annotations
 
-import json
 import threading
 from pathlib import Path
 from typing import Callable
@@ -11,6 +10,7 @@ from typing import Callable
 import numpy as np
 import viser
 
+from policies.run_dir import RunDir
 from web.trajectory import Trajectory
 
 PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22",
@@ -89,23 +89,6 @@ class RolloutPlots:
         self._metric_plot.set(name, "time s", self._time(), {name: values})
 
 
-def read_metrics(path: Path) -> list[dict]:
-    """Records of a metrics.jsonl file; a line being written (not yet valid JSON) is skipped."""
-    records = []
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        return records
-    for line in text.splitlines():
-        try:
-            record = json.loads(line)
-        except json.JSONDecodeError:
-            continue
-        if isinstance(record, dict) and isinstance(record.get("step"), (int, float)):
-            records.append(record)
-    return records
-
-
 def numeric_keys(records: list[dict]) -> list[str]:
     """Keys other than `step` that hold a number in some record."""
     keys = {k for r in records for k, v in r.items()
@@ -116,8 +99,8 @@ def numeric_keys(records: list[dict]) -> list[str]:
 class TrainingCurves:
     """One curve of a run's metrics.jsonl against environment steps; `refresh()` re-reads a changed file."""
 
-    def __init__(self, gui: viser.GuiApi, metrics_path: Path, initial: str = "episode_return"):
-        self.path = Path(metrics_path)
+    def __init__(self, gui: viser.GuiApi, run: RunDir, initial: str = "episode_return"):
+        self.run, self.path = run, run.metrics_path
         folder = gui.add_folder("Training curves")
         with folder:
             self.key = gui.add_dropdown("Curve", (initial,), initial_value=initial)
@@ -138,7 +121,7 @@ class TrainingCurves:
         if stamp == self._stamp:
             return False
         self._stamp = stamp
-        self._records = read_metrics(self.path)
+        self._records = self.run.metrics()
         keys = numeric_keys(self._records)
         if keys:
             self.key.options = keys if self.key.value in keys else [self.key.value] + keys

@@ -14,6 +14,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from legged.envs.vector import select_envs
 from web.trajectory import Trajectory
 
 Act = Callable[[np.ndarray], np.ndarray]
@@ -30,12 +31,6 @@ class RecorderConfig:
     """Sideways distance between robots drawn on a scene without height fields, metres."""
     distinct_tiles: bool = True
     """On tiled terrains, pick reset keys so that the environments start in different worlds."""
-
-
-def _freeze(done, old, new):
-    """Keep `old` wherever the episode has already ended."""
-    return jax.tree_util.tree_map(lambda a, b: jnp.where(done.reshape(done.shape + (1,) * (a.ndim - 1)), a, b),
-                                  old, new)
 
 
 class Recorder:
@@ -69,7 +64,7 @@ class Recorder:
 
     def _step_frozen(self, state, action):
         nxt = jax.vmap(self.env.step)(state, action)
-        nxt = _freeze(state.done > 0, state, nxt)
+        nxt = select_envs(state.done > 0, state, nxt)  # finished episodes stay frozen
         return self._with_extras(nxt)
 
     # ------------------------------------------------------------------ recording

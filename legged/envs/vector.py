@@ -46,8 +46,8 @@ class StepResult:
     """For each episode statistic, its value for the episodes that ended here and 0 elsewhere, shape (n,)."""
 
 
-def _select(mask, on_true, on_false):
-    """Per-environment choice between two batched pytrees."""
+def select_envs(mask, on_true, on_false):
+    """Per-environment choice between two batched pytrees: `on_true` where mask (n,) is set."""
     def pick(a, b):
         m = mask.reshape(mask.shape + (1,) * (a.ndim - 1))
         return jnp.where(m, a, b)
@@ -98,7 +98,7 @@ class VectorEnv:
         finished.update({k: jnp.where(done, v, 0.0) for k, v in nxt.metrics.items() if not k.startswith("reward/")})
         split = jax.vmap(jax.random.split)(batch.keys)
         fresh = jax.lax.cond(done.any(), lambda: jax.vmap(self.env.reset)(split[:, 0]), lambda: nxt)
-        state = _select(done, fresh, nxt)
+        state = select_envs(done, fresh, nxt)
         sums = {k: jnp.where(done, 0.0, v) for k, v in sums.items()}
         result = StepResult(obs=state.obs, reward=nxt.reward, done=done,
                             time_out=done & (nxt.info["truncation"] > 0), finished=finished)

@@ -70,13 +70,14 @@ class RayCameraConfig:
                 raise ValueError(f"{name} must lie in [0, 1], got {getattr(self, name)}")
 
 
-def _geom_rgba(model: mujoco.MjModel, g: int) -> np.ndarray:
-    """Colour MuJoCo draws a geom in: its material's unless the geom's own rgba was set."""
+def drawn_rgba(model: mujoco.MjModel, g: int) -> tuple[np.ndarray, int]:
+    """Colour MuJoCo draws a geom in (its material's unless the geom's own rgba was set) and the id of the
+    material that colour came from (-1: the geom's own)."""
     rgba = model.geom_rgba[g].astype(np.float32)
     mat = int(model.geom_matid[g])
     if mat >= 0 and np.allclose(rgba, _DEFAULT_RGBA):
-        return model.mat_rgba[mat].astype(np.float32)
-    return rgba
+        return model.mat_rgba[mat].astype(np.float32), mat
+    return rgba, -1
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -118,7 +119,7 @@ class RayCamera:
         camera_ids = np.atleast_1d(np.asarray(camera_ids, dtype=np.int32))
         if camera_ids.size == 0 or camera_ids.min() < 0 or camera_ids.max() >= model.ncam:
             raise ValueError(f"camera_ids must name cameras of the model (0..{model.ncam - 1}), got {camera_ids}")
-        rgba = np.stack([_geom_rgba(model, g) for g in range(model.ngeom)]) if model.ngeom else np.zeros((0, 4))
+        rgba = np.stack([drawn_rgba(model, g)[0] for g in range(model.ngeom)]) if model.ngeom else np.zeros((0, 4))
         groups = np.asarray(config.geom_groups)
         visible = np.isin(model.geom_group, groups) & (rgba[:, 3] > 0)
         geoms = GeomSet.from_model(model, np.nonzero(visible)[0])

@@ -26,15 +26,15 @@ def match_state(model: mujoco.MjModel, config: SoccerSceneConfig, seed: int, spr
     ball anywhere on the pitch 0.3 m inside the lines. Robots stand in their default pose."""
     layout = SoccerLayout.from_model(model)
     poses = np.asarray(kickoff_poses(config), dtype=np.float64)
-    data = mujoco.MjData(model)
-    qpos = layout.kickoff_qpos(model, poses)
+    rng = np.random.default_rng(seed)
     if seed:
-        rng = np.random.default_rng(seed)
         poses = poses + np.column_stack([rng.uniform(-spread, spread, (len(poses), 2)),
                                          rng.uniform(-np.pi / 2, np.pi / 2, len(poses))])
-        qpos = layout.kickoff_qpos(model, poses)
+    qpos = layout.kickoff_qpos(model, poses)
+    if seed:
         half = np.array([config.field_length, config.field_width]) / 2 - 0.3
         qpos[layout.ball_qpos_adr: layout.ball_qpos_adr + 2] = rng.uniform(-half, half)
+    data = mujoco.MjData(model)
     data.qpos[:] = qpos
     data.ctrl[:] = layout.default_ctrl(model)
     mujoco.mj_forward(model, data)
