@@ -13,6 +13,7 @@ import mujoco
 import numpy as np
 import viser
 
+from legged.worlds.mjcf import CEILING_GEOM, SceneOptions
 from web.geometry import GeomMesh, MeshOptions, geom_meshes
 
 GROUP_NAMES = {0: "terrain/world", 1: "group 1", 2: "visual", 3: "collision", 4: "group 4", 5: "group 5"}
@@ -27,9 +28,9 @@ class SceneConfig:
     """Tessellation of primitives and size of infinite planes."""
     visible_groups: tuple[int, ...] = (0, 1, 2)
     """Geom groups shown at start (MuJoCo's viewer shows 0-2); the others can be switched on."""
-    ceiling_geoms: tuple[str, ...] = ("ceiling",)
+    ceiling_geoms: tuple[str, ...] = (CEILING_GEOM,)
     """Names of geoms drawn translucent so that a robot inside a tunnel stays visible."""
-    ceiling_opacity: float = 0.35
+    ceiling_opacity: float = SceneOptions.ceiling_alpha
     """Largest opacity of the ceiling geoms (lower if the model's own alpha is lower)."""
     plane_grid: bool = True
     """Draw grid lines on planes (a flat floor is otherwise one uniform colour)."""
