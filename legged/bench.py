@@ -15,7 +15,7 @@ import numpy as np
 from legged.envs import make
 
 
-def _time_calls(fn, state, seconds: float) -> tuple[object, int, float]:
+def time_calls(fn, state, seconds: float) -> tuple[object, int, float]:
     """Call fn repeatedly for about `seconds`; returns the last state, calls made and elapsed time."""
     calls, t0 = 0, time.perf_counter()
     while True:
@@ -65,7 +65,7 @@ def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0
         state = compiled(state, action)
         if progress:
             progress(f"{task}: batch {batch}: timing for {seconds:.0f} s")
-        state, calls, elapsed = _time_calls(lambda s: compiled(s, action), state, seconds)
+        state, calls, elapsed = time_calls(lambda s: compiled(s, action), state, seconds)
         records.append({
             "task": task, "batch": batch, "env_steps_per_s": round(calls * batch / elapsed, 1),
             "compile_s": round(compile_s, 2), "reset_compile_s": round(reset_s, 2),

@@ -142,6 +142,18 @@ def cmd_bench(args) -> int:
     return _print_records(records, args.json, print_table)
 
 
+def cmd_bench_soccer(args) -> int:
+    from legged.soccer.bench import bench_soccer, print_soccer_table
+
+    if not set(args.team_sizes) <= {1, 2}:
+        raise ValueError(f"--team-sizes takes 1 and/or 2 (1v1, 2v2), got {args.team_sizes}")
+    cameras = {"off": (False,), "on": (True,), "both": (False, True)}[args.camera]
+    progress = None if args.quiet else (lambda msg: print(f"[bench] {msg}", file=sys.stderr, flush=True))
+    records = bench_soccer(args.team_sizes, cameras, args.batch, args.seconds, peer=not args.no_peer,
+                           peer_steps=args.peer_steps, progress=progress)
+    return _print_records(records, args.json, print_soccer_table)
+
+
 def cmd_train(args) -> int:
     from policies.training import resume_run, start_run
 
@@ -193,13 +205,16 @@ def cmd_export(args) -> int:
 
 
 def cmd_camera(args) -> int:
-    from legged.soccer import build_soccer_scene
-    from legged.soccer.states import match_state, scene_config
+    from legged.envs import default_config, make
+    from legged.soccer.states import game_start
+    from legged.soccer.task_config import SoccerConfig
     from legged.soccer.vision import write_camera_images
 
-    config = scene_config(args.task)  # fails on unknown names before the scene is built
-    model = build_soccer_scene(config)
-    report = write_camera_images(model, match_state(model, config, args.seed), args.out)
+    if not isinstance(default_config(args.task), SoccerConfig):  # unknown names fail here too
+        raise ValueError(f"{args.task!r} is not a soccer task; soccer tasks: soccer-1v1, soccer-1v1-vision, "
+                         "soccer-2v2")
+    env = make(args.task)
+    report = write_camera_images(env.mj_model, game_start(env, args.seed), args.out, env.config.camera)
     report = dict(report, task=args.task, seed=args.seed)
     if args.json:
         print(json.dumps(report))
@@ -277,6 +292,17 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--json", action="store_true", help="print a JSON list, one object per batch size")
     be.add_argument("--quiet", action="store_true", help="no progress messages")
     be.set_defaults(fn=cmd_bench)
+    bs = bsub.add_parser("soccer", help="soccer env steps per second (1v1, 2v2, with/without cameras) beside "
+                                        "native MuJoCo and dm_control's soccer")
+    bs.add_argument("--team-sizes", type=_ints(1), default=[1, 2], help="players per team: 1 and/or 2")
+    bs.add_argument("--camera", choices=("off", "on", "both"), default="both", help="head cameras rendered")
+    bs.add_argument("--batch", type=_ints(1), default=[1, 16, 64], help="comma-separated batch sizes")
+    bs.add_argument("--seconds", type=float, default=3.0, help="timed seconds per measurement")
+    bs.add_argument("--no-peer", action="store_true", help="skip dm_control's soccer")
+    bs.add_argument("--peer-steps", type=int, default=20, help="control steps timed per dm_control env")
+    bs.add_argument("--json", action="store_true", help="print a JSON list, one object per measurement")
+    bs.add_argument("--quiet", action="store_true", help="no progress messages")
+    bs.set_defaults(fn=cmd_bench_soccer)
     bp = bsub.add_parser("plan", help="planning time and path length per difficulty over generated worlds")
     bp.add_argument("--difficulties", type=_ints(0), default=[0, 1, 2], help="comma-separated levels")
     bp.add_argument("--worlds", type=int, default=20, help="worlds per difficulty (seeds first-seed onward)")

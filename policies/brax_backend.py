@@ -22,8 +22,9 @@ import pickle
 import time
 
 import jax
+import jax.numpy as jnp
 import numpy as np
-from brax.envs.base import Wrapper
+from brax.envs.base import Env, State, Wrapper
 from brax.envs.wrappers.training import EpisodeWrapper, VmapWrapper
 from brax.training.agents.ppo import networks as ppo_networks
 from brax.training.agents.ppo import train as brax_ppo
@@ -69,6 +70,32 @@ class FullResetWrapper(Wrapper):
         kept = state.replace(info={**state.info, "reset_key": split[:, 1]})
         new = jax.lax.cond(done.any(), fresh, lambda: kept)
         return select_envs(done, new.replace(done=state.done, reward=state.reward, metrics=state.metrics), kept)
+
+
+class UnusedEvalEnv(Env):
+    """Stands in for Brax's evaluation environment. `ppo.train` builds its Evaluator, which compiles a
+    128-environment reset at once, even with run_evals=False (about 30 s of compilation on a CPU for an
+    MJX env); evaluations never run here (`legged eval` does that), so this env's trivial reset is all
+    that is compiled."""
+
+    def reset(self, rng):
+        zero = jnp.zeros(())
+        return State(pipeline_state=None, obs={"state": jnp.zeros(1)}, reward=zero, done=zero, metrics={}, info={})
+
+    def step(self, state, action):
+        raise RuntimeError("the stand-in evaluation environment is never stepped (run_evals=False)")
+
+    @property
+    def observation_size(self):
+        return {"state": (1,)}
+
+    @property
+    def action_size(self) -> int:
+        return 1
+
+    @property
+    def backend(self) -> str:
+        return "none"
 
 
 def wrap_for_training(env, episode_length: int, action_repeat: int, randomization_fn=None):
@@ -200,7 +227,8 @@ def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, prog
                 clipping_epsilon=ppo.clip_param, max_grad_norm=ppo.max_grad_norm, normalize_observations=True,
                 normalize_observations_std_eps=ppo.obs_std_floor ** 2,
                 network_factory=network_factory(config), seed=config.seed + start_step, num_evals=reports + 1,
-                run_evals=False, log_training_metrics=True, progress_fn=on_progress, policy_params_fn=on_params,
+                run_evals=False, eval_env=UnusedEvalEnv(), num_eval_envs=1, log_training_metrics=True,
+                progress_fn=on_progress, policy_params_fn=on_params,
                 wrap_env_fn=wrap_for_training,
                 restore_params=restore, restore_value_fn=True)
     finally:

@@ -57,6 +57,21 @@ class PPOConfig:
 
 
 @dataclasses.dataclass(frozen=True)
+class SelfPlayConfig:
+    """Who the soccer learner plays against (soccer tasks only; the learner is agent 0, see LearnerView)."""
+
+    opponent: Literal["auto", "scripted", "self-play"] = "auto"
+    """self-play: frozen snapshots of the learner drive the other robots (rsl backend, state tasks);
+    scripted: the fixed script; auto: self-play where it applies, else scripted (Brax, vision tasks)."""
+    snapshot_every: int = 10
+    """Iterations between snapshots of the learner's actor into the pool."""
+    pool_size: int = 8
+    """Snapshots kept (the oldest is dropped)."""
+    scripted_fraction: float = 0.2
+    """Chance that an iteration plays the script instead of a snapshot (always, while the pool is empty)."""
+
+
+@dataclasses.dataclass(frozen=True)
 class TrainConfig:
     """One training run."""
 
@@ -78,6 +93,16 @@ class TrainConfig:
     """PPO hyper-parameters."""
     env: Any = None
     """The task's environment config (filled in from the task's defaults)."""
+    selfplay: SelfPlayConfig = SelfPlayConfig()
+    """Opponents of the soccer tasks (ignored by the others)."""
+
+    @property
+    def self_play(self) -> bool:
+        """Whether this run trains against snapshots of itself (soccer, rsl backend, state observations)."""
+        soccer, vision = _soccer_task(self.env)
+        if not soccer or self.selfplay.opponent == "scripted":
+            return False
+        return self.backend == "rsl" and not vision
 
     def resolved(self) -> "TrainConfig":
         """This config with the task's default env config filled in and values checked."""
@@ -87,10 +112,27 @@ class TrainConfig:
         for name in ("num_envs", "timesteps", "checkpoint_every"):
             if getattr(cfg, name) < 1:
                 raise ConfigError(f"{name} must be >= 1, got {getattr(cfg, name)}")
+        soccer, vision = _soccer_task(cfg.env)
+        if vision and cfg.backend == "brax":
+            raise ConfigError(f"{cfg.task} needs --backend rsl: its actor reads camera images with a CNN, and the "
+                              "Brax backend builds MLPs only")
+        if soccer and cfg.selfplay.opponent == "self-play" and (cfg.backend == "brax" or vision):
+            raise ConfigError("selfplay.opponent=self-play needs the rsl backend and a state task (snapshots of the "
+                              "learner are MLPs on the state features); use selfplay.opponent=scripted")
+        sp = cfg.selfplay
+        if sp.snapshot_every < 1 or sp.pool_size < 1 or not 0.0 <= sp.scripted_fraction <= 1.0:
+            raise ConfigError("selfplay: snapshot_every and pool_size must be >= 1, scripted_fraction in [0, 1]")
         if cfg.num_envs * cfg.ppo.num_steps_per_env % cfg.ppo.num_mini_batches:
             raise ConfigError(f"num_envs x num_steps_per_env ({cfg.num_envs} x {cfg.ppo.num_steps_per_env}) must "
                               f"divide into num_mini_batches ({cfg.ppo.num_mini_batches})")
         return cfg
+
+
+def _soccer_task(env_config) -> tuple[bool, bool]:
+    """(is a soccer task, sees camera images) for a task's env config."""
+    from legged.soccer.task_config import SoccerConfig
+
+    return isinstance(env_config, SoccerConfig), bool(getattr(env_config, "vision", False))
 
 
 def to_dict(obj) -> dict:

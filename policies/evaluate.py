@@ -11,6 +11,7 @@ from tqdm import tqdm
 from legged.envs.confined import ConfinedConfig
 from legged.envs.native import NativeRunner
 from legged.envs.vector import VectorEnv
+from policies.policy_io import actor_observation
 
 HELD_OUT_SEED_OFFSET = 1_000_003
 """Evaluation worlds use world_seed + this: never the worlds the policy trained on."""
@@ -29,6 +30,12 @@ def summarize(finals: list[dict], confined: bool) -> dict:
            "episode_length_steps": float(np.mean([f["length"] for f in finals]))}
     terms = sorted(k for k in finals[0] if k.startswith("reward/"))
     out["reward_terms"] = {k[7:]: float(np.mean([f[k] for f in finals])) for k in terms}
+    if "goals_for" in finals[0]:  # soccer, from the learner's side against the evaluation opponent
+        goals_for = np.array([f["goals_for"] for f in finals])
+        goals_against = np.array([f["goals_against"] for f in finals])
+        out.update(goals_for_per_episode=float(goals_for.mean()), goals_against_per_episode=float(goals_against.mean()),
+                   win_rate=float((goals_for > goals_against).mean()),
+                   fall_rate=float(np.mean([f["fell"] > 0 for f in finals])))
     if confined:
         success = np.array([f["success"] > 0 for f in finals])
         out["success_rate"] = float(success.mean())
@@ -46,7 +53,7 @@ def evaluate_mjx(env, policy, episodes: int, seed: int, num_envs: int = 16, prog
     obs, finals = batch.state.obs, []
     bar = tqdm(total=episodes, desc="eval (MJX)", unit="episode", disable=not progress)
     while len(finals) < episodes:
-        batch, result = vector.step(batch, policy.act(np.asarray(obs["state"])))
+        batch, result = vector.step(batch, policy.act(actor_observation(obs)))
         obs = result.obs
         done = np.asarray(result.done)
         for i in np.flatnonzero(done)[: episodes - len(finals)]:
@@ -58,6 +65,9 @@ def evaluate_mjx(env, policy, episodes: int, seed: int, num_envs: int = 16, prog
 
 def evaluate_native(env, policy, episodes: int, seed: int, progress: bool = True) -> list[dict]:
     """Run the policy with native MuJoCo physics (sim-to-sim), one episode after another."""
+    if not hasattr(env, "transition") or hasattr(env, "game"):
+        raise ValueError("--native is not available for the soccer tasks: evaluate them in MJX, or step the game "
+                         "natively with legged.soccer.parallel_env.SoccerParallelEnv (PettingZoo)")
     runner, finals = NativeRunner(env), []
     keys = jax.random.split(jax.random.PRNGKey(seed), episodes)
     for k in tqdm(range(episodes), desc="eval (native MuJoCo)", unit="episode", disable=not progress):

@@ -54,14 +54,21 @@ def export_onnx(policy: Policy, path: str | Path, samples: int = 64, seed: int =
     path.parent.mkdir(parents=True, exist_ok=True)
     module = actor_module(policy)
     tmp = path.with_name(f".{path.name}.tmp")
-    torch.onnx.export(module, (torch.zeros(1, policy.obs_size),), str(tmp), input_names=["obs"],
-                      output_names=["actions"], dynamic_axes={"obs": {0: "batch"}, "actions": {0: "batch"}},
+    camera = policy.obs_sizes.get("camera")  # camera tasks: (C, H, W) images beside the state vector
+    names = ["obs"] + (["camera"] if camera else [])
+    dummy = (torch.zeros(1, policy.obs_size),) + ((torch.zeros(1, *camera),) if camera else ())
+    torch.onnx.export(module, dummy, str(tmp), input_names=names, output_names=["actions"],
+                      dynamic_axes={**{n: {0: "batch"} for n in names}, "actions": {0: "batch"}},
                       opset_version=18, dynamo=False)
     tmp.replace(path)
-    obs = np.random.default_rng(seed).normal(size=(samples, policy.obs_size)).astype(np.float32)
+    rng = np.random.default_rng(seed)
+    obs = rng.normal(size=(samples, policy.obs_size)).astype(np.float32)
+    feeds = {"obs": obs}
+    if camera:
+        feeds["camera"] = rng.random((samples, *camera), dtype=np.float32)
     session = onnxruntime.InferenceSession(str(path), providers=["CPUExecutionProvider"])
-    onnx_actions = session.run(["actions"], {"obs": obs})[0]
-    gap = float(np.abs(onnx_actions - policy.act(obs)).max())
+    onnx_actions = session.run(["actions"], feeds)[0]
+    gap = float(np.abs(onnx_actions - policy.act({"state": obs, "camera": feeds["camera"]} if camera else obs)).max())
     if not gap <= PARITY_ATOL:
         raise RuntimeError(f"ONNX export of {policy.checkpoint} differs from the policy by {gap:.2e} "
                            f"(allowed {PARITY_ATOL:.0e})")

@@ -16,7 +16,8 @@ from policies.run_dir import RunDir, RunDirError
 
 @dataclasses.dataclass
 class Policy:
-    """A deterministic policy: actor observations (n, obs) -> actions (n, actions), numpy in and out."""
+    """A deterministic policy: actor observations (n, obs) -> actions (n, actions), numpy in and out (camera
+    tasks: a dict of `state` and `camera`, see `actor_observation`)."""
 
     act: Callable[[np.ndarray], np.ndarray]
     """The policy function."""
@@ -49,9 +50,12 @@ def _rsl_policy(config: TrainConfig, path: Path) -> Policy:
     alg.load(payload["alg"], {"actor": True}, strict=True)
     module = alg.get_policy().as_onnx(verbose=False).eval()
 
-    def act(obs: np.ndarray) -> np.ndarray:
+    def act(obs) -> np.ndarray:
+        tensor = lambda x: torch.as_tensor(np.asarray(x, np.float32))
         with torch.inference_mode():
-            return module(torch.as_tensor(np.asarray(obs, np.float32))).numpy()
+            if isinstance(obs, dict):  # a camera task: the state vector, then the images (CNN actor)
+                return module(tensor(obs["state"]), tensor(obs["camera"])).numpy()
+            return module(tensor(obs)).numpy()
 
     return Policy(act=act, backend="rsl", step=payload["step"], obs_sizes=payload["obs_sizes"],
                   num_actions=payload["num_actions"], checkpoint=path, torch_module=module)
@@ -78,6 +82,14 @@ def _brax_policy(config: TrainConfig, path: Path) -> Policy:
 
     return Policy(act=act, backend="brax", step=payload["step"], obs_sizes=sizes,
                   num_actions=payload["num_actions"], checkpoint=path, brax_params=(params[0], params[1]))
+
+
+def actor_observation(obs: dict):
+    """What `Policy.act` takes from a batch of observations: the `state` array, or for camera tasks a dict of
+    `state` and `camera` arrays."""
+    if "camera" in obs:
+        return {"state": np.asarray(obs["state"]), "camera": np.asarray(obs["camera"])}
+    return np.asarray(obs["state"])
 
 
 def load_policy(run_dir: str | Path, checkpoint: str | Path | None = None) -> tuple[Policy, TrainConfig]:

@@ -17,17 +17,25 @@ from tqdm import tqdm
 from legged.envs.vector import VectorEnv
 from policies.config import PPOConfig, TrainConfig
 from policies.distributed import Launch, init_torch_processes
-from policies.rsl_vecenv import OBS_GROUPS, RslVecEnv
+from policies.rsl_vecenv import RslVecEnv, obs_groups
 from policies.run_dir import RunDir, RunDirError, check_compatible
 
 
-def rsl_config(ppo: PPOConfig, multi_gpu: dict | None = None) -> dict:
-    """rsl-rl's train_cfg for PPO with an MLP actor on `state` and an MLP critic on `privileged_state`."""
+CAMERA_CNN = {"output_channels": [16, 32, 32], "kernel_size": [5, 3, 3], "stride": [2, 2, 1], "padding": "zeros",
+              "activation": "elu", "global_pool": "avg", "flatten": True}
+"""The actor's image encoder when the task has a `camera` observation (40 x 30 -> 20 x 15 -> 10 x 8 -> 32)."""
+
+
+def rsl_config(ppo: PPOConfig, multi_gpu: dict | None = None, camera: bool = False) -> dict:
+    """rsl-rl's train_cfg for PPO with an MLP actor on `state` (plus a CNN on `camera` when the task has one)
+    and an MLP critic on `privileged_state`."""
     def model(hidden, stochastic):
         cfg = {"class_name": "MLPModel", "hidden_dims": list(hidden), "activation": ppo.activation,
                "obs_normalization": ppo.obs_normalization}
         if stochastic:
             cfg["distribution_cfg"] = {"class_name": "GaussianDistribution", "init_std": ppo.init_noise_std}
+            if camera:
+                cfg.update(class_name="CNNModel", cnn_cfg=dict(CAMERA_CNN))
         return cfg
     return {
         "algorithm": {"class_name": "PPO", "learning_rate": ppo.learning_rate, "num_learning_epochs":
@@ -37,7 +45,7 @@ def rsl_config(ppo: PPOConfig, multi_gpu: dict | None = None) -> dict:
                       "max_grad_norm": ppo.max_grad_norm, "schedule": "adaptive"},
         "actor": model(ppo.actor_hidden, True),
         "critic": model(ppo.critic_hidden, False),
-        "obs_groups": dict(OBS_GROUPS),
+        "obs_groups": obs_groups(camera),
         "num_steps_per_env": ppo.num_steps_per_env,
         "multi_gpu": multi_gpu,
     }
@@ -45,7 +53,8 @@ def rsl_config(ppo: PPOConfig, multi_gpu: dict | None = None) -> dict:
 
 def dummy_observations(obs_sizes: dict, num_envs: int = 1) -> TensorDict:
     """Zero observations of the given sizes (to build networks without an environment)."""
-    return TensorDict({k: torch.zeros(num_envs, n) for k, n in obs_sizes.items()}, batch_size=[num_envs])
+    shape = lambda n: (n,) if isinstance(n, int) else tuple(n)
+    return TensorDict({k: torch.zeros(num_envs, *shape(n)) for k, n in obs_sizes.items()}, batch_size=[num_envs])
 
 
 class _Shapes:
@@ -60,7 +69,7 @@ def build_ppo(obs: TensorDict, num_envs: int, num_actions: int, ppo: PPOConfig, 
     """rsl-rl PPO with its actor, critic and rollout storage (gradients averaged over `launch`'s processes)."""
     with contextlib.redirect_stdout(io.StringIO()):  # rsl-rl prints the whole network
         return PPO.construct_algorithm(obs, _Shapes(num_envs, num_actions),
-                                       rsl_config(ppo, launch.multi_gpu_config()), device)
+                                       rsl_config(ppo, launch.multi_gpu_config(), "camera" in obs.keys()), device)
 
 
 def load_checkpoint(path: Path) -> dict:
@@ -102,6 +111,14 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         alg.load(payload["alg"], None, strict=True)
         if launch.is_main:
             torch.set_rng_state(payload["torch_rng"])
+    pool = None
+    if config.self_play:
+        from policies.selfplay import OpponentPool
+
+        pool = OpponentPool(config.selfplay, env.game.policy_state_size, env.action_size, ppo.actor_hidden,
+                            seed=config.seed + launch.rank + 7919 * iteration)
+        if payload is not None and "opponent_pool" in payload:
+            pool.load_state_dict(payload["opponent_pool"])
     if launch.distributed:
         alg.broadcast_parameters()  # every process starts from rank 0's networks
     from torch.utils.tensorboard import SummaryWriter
@@ -116,6 +133,10 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         while iteration < iterations:
             t0 = time.perf_counter()
             reward_sum = torch.zeros((), device=device)
+            opponent = None
+            if pool is not None:
+                opponent, data = pool.sample()
+                venv.env_args = (data,)
             with torch.inference_mode():
                 for _ in range(ppo.num_steps_per_env):
                     actions = alg.act(obs)
@@ -125,6 +146,10 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                 alg.compute_returns(obs)
             losses = alg.update()
             iteration += 1
+            if pool is not None and iteration % config.selfplay.snapshot_every == 0:
+                from policies.selfplay import snapshot_rsl_actor
+
+                pool.add(snapshot_rsl_actor(alg.get_policy()))
             step += per_iteration
             elapsed = time.perf_counter() - t0
             record = {"step": step, "iteration": iteration, "episode_return": None, "episode_length": None,
@@ -134,13 +159,16 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                       "learning_rate": alg.learning_rate,
                       "action_std": float(alg.get_policy().output_std.detach().mean()),
                       **{f"loss_{k}": float(v) for k, v in losses.items()}}
+            if pool is not None:
+                record.update(opponent=opponent, opponent_pool=len(pool.snapshots))
             bar.update(per_iteration)
             bar.set_postfix(ret=_short(record["episode_return"]), sps=f"{record['steps_per_s']:.0f}")
             if not launch.is_main:
                 continue
             run.log(record, writer)
             if iteration % config.checkpoint_every == 0 or iteration == iterations:
-                save_checkpoint(run, alg, iteration, step, obs_sizes, env.action_size)
+                save_checkpoint(run, alg, iteration, step, obs_sizes, env.action_size,
+                                opponent_pool=None if pool is None else pool.state_dict())
     finally:
         bar.close()
         if writer is not None:
@@ -152,9 +180,13 @@ def _short(value) -> str:
     return "-" if value is None else f"{value:.2f}"
 
 
-def save_checkpoint(run: RunDir, alg: PPO, iteration: int, step: int, obs_sizes: dict, num_actions: int) -> Path:
-    """Model, optimiser, counters and RNG state, written atomically."""
+def save_checkpoint(run: RunDir, alg: PPO, iteration: int, step: int, obs_sizes: dict, num_actions: int,
+                    opponent_pool: dict | None = None) -> Path:
+    """Model, optimiser, counters, RNG state and (soccer self-play) the opponent pool, written atomically."""
     buffer = io.BytesIO()
-    torch.save({"backend": "rsl", "alg": alg.save(), "iteration": iteration, "step": step, "obs_sizes": obs_sizes,
-                "num_actions": num_actions, "torch_rng": torch.get_rng_state()}, buffer)
+    payload = {"backend": "rsl", "alg": alg.save(), "iteration": iteration, "step": step, "obs_sizes": obs_sizes,
+               "num_actions": num_actions, "torch_rng": torch.get_rng_state()}
+    if opponent_pool is not None:
+        payload["opponent_pool"] = opponent_pool
+    torch.save(payload, buffer)
     return run.write_checkpoint(step, "pt", buffer.getvalue())

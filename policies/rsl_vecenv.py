@@ -1,9 +1,10 @@
 """rsl-rl's VecEnv over a `VectorEnv`: arrays cross between JAX and PyTorch through DLPack.
 
 On a GPU both frameworks share the device memory (no copies); on the CPU DLPack shares host memory.
-Observation groups: `state` (actor) and `privileged_state` (critic). `extras['time_outs']` marks episodes
-cut by the time limit (rsl-rl bootstraps their value); `extras['log']` carries the mean of every
-finished episode's statistics (return, length, each reward term, the task's metrics).
+Observation groups: `state` (actor; with `camera` where a task has one) and `privileged_state` (critic).
+`extras['time_outs']` marks episodes cut by the time limit (rsl-rl bootstraps their value); `extras['log']`
+carries the mean of every finished episode's statistics (return, length, each reward term, the task's
+metrics).
 """
 
 from __future__ import annotations
@@ -16,8 +17,11 @@ from tensordict import TensorDict
 
 from legged.envs.vector import VectorEnv
 
-OBS_GROUPS = {"actor": ["state"], "critic": ["privileged_state"]}
-"""Asymmetric actor-critic: what the actor and the critic read."""
+
+def obs_groups(camera: bool = False) -> dict:
+    """Asymmetric actor-critic: the actor reads `state` (and `camera` when there is one), the critic
+    `privileged_state`."""
+    return {"actor": ["state", "camera"] if camera else ["state"], "critic": ["privileged_state"]}
 
 
 @jax.jit
@@ -75,6 +79,8 @@ class RslVecEnv(VecEnv):
         self.batch = vector.reset(jax.random.PRNGKey(seed))
         self._obs = self.batch.state.obs
         self.episode_stats = EpisodeStats()
+        self.env_args = ()
+        """Extra arguments of every env step (a soccer LearnerView's opponent), set between iterations."""
 
     @property
     def episode_length_buf(self) -> torch.Tensor:
@@ -86,14 +92,14 @@ class RslVecEnv(VecEnv):
         self.batch.state.info["step"] = to_jax(value.to(torch.int32))
 
     def _observations(self, obs: dict) -> TensorDict:
-        return TensorDict({k: to_torch(obs[k], self.device) for k in ("state", "privileged_state")},
+        return TensorDict({k: to_torch(v, self.device) for k, v in obs.items()},
                           batch_size=[self.num_envs], device=self.device)
 
     def get_observations(self) -> TensorDict:
         return self._observations(self._obs)
 
     def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
-        self.batch, result = self.vector.step(self.batch, to_jax(actions).astype(jnp.float32))
+        self.batch, result = self.vector.step(self.batch, to_jax(actions).astype(jnp.float32), *self.env_args)
         self._obs = result.obs
         step_means = self.episode_stats.add(result)
         extras = {"time_outs": to_torch(result.time_out, self.device),

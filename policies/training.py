@@ -10,7 +10,16 @@ from policies.run_dir import RunDir
 
 
 def build_env(config: TrainConfig):
-    """The run's environment: confined tasks on traversable worlds with planned waypoints."""
+    """The run's environment: confined tasks on traversable worlds with planned waypoints; soccer tasks as
+    the learner's view of the game (agent 0; the others driven by opponents given to each step)."""
+    from legged.soccer.task_config import SoccerConfig
+
+    if isinstance(config.env, SoccerConfig):
+        from legged.envs import make
+        from legged.soccer.learner import LearnerView
+        from legged.soccer.opponents import OpponentNet
+
+        return LearnerView(make(config.task, config.env), OpponentNet(config.ppo.activation), config.ppo.actor_hidden)
     from planners import make_planned_env
 
     return make_planned_env(config.task, config=config.env)

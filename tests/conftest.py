@@ -10,6 +10,12 @@ from legged.worlds import Terrain, generate_world
 
 BATCH = 8
 """Every test uses this one batch size: each new size would compile the env again (about a minute)."""
+TINY_EPISODE_S = 0.2
+"""Episodes of the tiny training runs: 10 control steps, so that episodes end inside a tiny run."""
+TINY_RUN = ["env.episode_seconds=0.2", "ppo.num_steps_per_env=5", "ppo.num_mini_batches=2", "checkpoint_every=1",
+            "ppo.actor_hidden=[32, 32]", "ppo.critic_hidden=[32, 32]"]
+"""Overrides of the tiny go1-flat runs: 8 envs x 5 steps = 40 env steps per iteration; episodes end in
+iteration 2."""
 
 
 class Compiled:

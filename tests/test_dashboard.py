@@ -110,12 +110,12 @@ def test_height_field_mesh_matches_the_model(confined_env):
             assert hit == pytest.approx(0.01, abs=2e-4), (name, point)
 
 
-@pytest.mark.parametrize("scene", ["confined", "go1-flat"])
+@pytest.mark.parametrize("scene", ["confined", "go1-flat", "soccer-2v2"])
 @pytest.mark.parametrize("num_envs", [1, 2])
 def test_every_geom_becomes_a_scene_node(scene, num_envs, confined_env, server):
     from web.scene import SceneView, static_bodies
 
-    model = confined_env.mj_model if scene == "confined" else make("go1-flat").mj_model
+    model = confined_env.mj_model if scene == "confined" else make(scene).mj_model
     server.scene.reset()
     view = SceneView(server.scene, model, np.zeros((num_envs, 3)))
     static = static_bodies(model)[model.geom_bodyid]
@@ -130,7 +130,7 @@ def test_every_geom_becomes_a_scene_node(scene, num_envs, confined_env, server):
         assert len(ceiling) == 1 and ceiling[0].opacity is not None and ceiling[0].opacity <= 0.35
         view.set_ceiling(False, 0.2)
         assert not ceiling[0].visible
-    else:
+    elif scene == "go1-flat":
         assert ceiling == []
         floor = view.meshes[model.geom("floor").id]
         assert floor.kind == "plane" and np.ptp(floor.vertices[:, 0]) == pytest.approx(20.0)  # infinite -> 20 m

@@ -172,19 +172,20 @@ def test_agrees_with_mujocos_renderer_and_writes_images(soccer, tmp_path):
     assert figures["depth_within_5cm"] > 0.95
 
 
-def test_match_states_are_seeded_and_start_at_kickoff():
-    from legged.soccer.states import match_state, scene_config
+def test_camera_states_are_the_environment_resets():
+    """`legged camera --seed S` shows the game that the environment's reset with key S starts."""
+    from legged.envs import make
+    from legged.soccer.states import game_start
 
-    config = scene_config("soccer-1v1-vision")
-    model = build_soccer_scene(config)
-    layout = SoccerLayout.from_model(model)
-    ball = slice(layout.ball_qpos_adr, layout.ball_qpos_adr + 3)
-    kickoff, moved, again = (match_state(model, config, seed) for seed in (0, 3, 3))
-    assert np.allclose(kickoff.qpos[ball], [0.0, 0.0, config.ball_radius])
-    assert np.array_equal(moved.qpos, again.qpos) and not np.allclose(moved.qpos[ball][:2], 0.0)
-    assert np.all(np.abs(moved.qpos[ball][:2]) <= [config.field_length / 2, config.field_width / 2])
-    with pytest.raises(ValueError, match="soccer tasks: soccer-1v1, soccer-1v1-vision, soccer-2v2"):
-        scene_config("soccer-3v3")
+    env = make("soccer-1v1")
+    data = game_start(env, 3)
+    assert np.array_equal(data.qpos, game_start(env, 3).qpos)
+    reset = jax.jit(env.reset)(jax.random.PRNGKey(3))
+    assert np.allclose(data.qpos, np.asarray(reset.pipeline_state.qpos), atol=1e-6)
+    ball = data.qpos[env.layout.ball_qpos_adr:env.layout.ball_qpos_adr + 2]
+    scene = env.config.scene
+    assert np.all(np.abs(ball) <= [scene.field_length / 2, scene.field_width / 2])
+    assert not np.allclose(data.qpos, game_start(env, 4).qpos)
 
 
 def test_camera_command_writes_both_images_per_agent(tmp_path, capsys):

@@ -42,6 +42,7 @@ class Recorder:
         self.env, self.task, self.config = env, task, config
         self.has_path = hasattr(env, "path_of")
         self.has_scans = hasattr(env, "scan_world_points")
+        self.has_head_camera = hasattr(env, "camera_images")  # soccer: the learner's head camera
         self._reset = jax.jit(lambda keys: self._with_extras(jax.vmap(env.reset)(keys)))
         self._step = jax.jit(self._step_frozen)
         flat_ground = env.mj_model.nhfield == 0
@@ -57,6 +58,8 @@ class Recorder:
             out["scan"] = self.env.scan_world_points(state.pipeline_state)
         if self.has_path:
             out["path"], out["path_len"] = self.env.path_of(state.info)
+        if self.has_head_camera:
+            out["head_rgb"] = self.env.camera_images(state.pipeline_state)
         return out
 
     def _with_extras(self, state):
@@ -96,8 +99,10 @@ class Recorder:
         state, extras = self._reset(self.reset_keys(seed))
         zeros = np.zeros((n, env.action_size), np.float32)
         frames = [self._frame(state, extras)]
+        if act is not None:
+            from policies.policy_io import actor_observation  # a policy was loaded: torch is in already
         for k in range(steps):
-            action = zeros if act is None else np.asarray(act(np.array(state.obs["state"])), np.float32)
+            action = zeros if act is None else np.asarray(act(actor_observation(state.obs)), np.float32)
             state, extras = self._step(state, action)
             frames.append(self._frame(state, extras))
             if progress is not None:
@@ -116,9 +121,8 @@ class Recorder:
             frame["scan"] = np.asarray(extras["scan"], np.float32)
         if self.has_path:
             frame["waypoint"] = np.asarray(state.info["waypoint"], np.int32)
-        if "camera" in state.obs:
-            image = np.asarray(state.obs["camera"])
-            frame["camera"] = image if image.dtype == np.uint8 else (np.clip(image, 0, 1) * 255).astype(np.uint8)
+        if "head_rgb" in extras:
+            frame["camera"] = np.asarray(extras["head_rgb"], np.uint8)
         return frame
 
     def _trajectory(self, frames: list[dict], extras, state, seed: int, info: dict) -> Trajectory:

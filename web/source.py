@@ -159,15 +159,28 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
         policy, _ = load_policy(run_dir, request.checkpoint)
         log(f"[view] policy {policy.checkpoint} ({policy.backend}, {policy.step} env steps)")
     log(f"[view] building the {task} environment ...")
-    from planners.planned_env import make_planned_env
-
-    env = make_planned_env(task, config=config.env if config is not None else None, progress=False)
+    env = _build_env(task, config)
     if policy is not None:
         from policies.run_dir import check_compatible
 
         check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
     source = RolloutSource(env, task, RecorderConfig(num_envs=request.num_envs), policy, run_dir)
     return Resolved(source=source, trajectory=None, run_dir=run_dir)
+
+
+def _build_env(task: str, config):
+    """The environment a run trained on (soccer: the learner's view, scripted opponents), else the task's."""
+    from legged.envs import default_config
+    from legged.soccer.task_config import SoccerConfig
+
+    if isinstance(default_config(task), SoccerConfig):
+        from policies.config import TrainConfig
+        from policies.training import build_env
+
+        return build_env(config if config is not None else TrainConfig(task=task).resolved())
+    from planners.planned_env import make_planned_env
+
+    return make_planned_env(task, config=config.env if config is not None else None, progress=False)
 
 
 def _has_checkpoints(run_dir: Path) -> bool:

@@ -18,6 +18,7 @@ from mujoco import mjx
 from legged.envs.config import EnvConfig
 from legged.envs.contacts import MjxContactReader
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
+from legged.envs.rewards import penalty_terms
 from legged.robots.spec import RobotSpec
 from legged.sensors.heightscan import surface_height
 from legged.worlds.mjcf import SceneOptions, compile_scene
@@ -256,19 +257,8 @@ class LeggedEnv(Env, abc.ABC):
 
     def _penalties(self, data, info, action, qd, collisions) -> dict:
         """Penalty terms shared by all tasks (scales from the task config's `penalties`)."""
-        p = self.penalty_scales
-        q = self.joint_angles(data)
-        lo, hi = self.mj_model.jnt_range[1:, 0], self.mj_model.jnt_range[1:, 1]
-        soft = 0.05 * (hi - lo)
-        limit = jnp.sum(jnp.clip(lo + soft - q, 0.0) + jnp.clip(q - hi + soft, 0.0))
-        torque = data.actuator_force
-        return {
-            "joint_acc": p.joint_acc * jnp.sum(jnp.square((qd - info["last_qvel"]) / self.dt)),
-            "torques": p.torques * jnp.sum(jnp.square(torque)),
-            "joint_limits": p.joint_limits * limit,
-            "collisions": p.collisions * collisions,
-            "action_rate": p.action_rate * jnp.sum(jnp.square(action - info["last_action"])),
-        }
+        return penalty_terms(self.penalty_scales, self.joint_angles(data), self.mj_model.jnt_range[1:], qd,
+                             info["last_qvel"], self.dt, data.actuator_force, action, info["last_action"], collisions)
 
     @property
     @abc.abstractmethod

@@ -29,3 +29,13 @@ def roll_pitch(rot):
     pitch = -jnp.arcsin(jnp.clip(rot[2, 0], -1.0, 1.0))
     roll = jnp.arctan2(rot[2, 1], rot[2, 2])
     return roll, pitch
+
+
+def quat_to_mat(q):
+    """Rotation matrix of unit quaternion(s) (w, x, y, z), [..., 4] -> [..., 3, 3]."""
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    return jnp.stack([
+        jnp.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        jnp.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        jnp.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], -2)

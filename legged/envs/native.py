@@ -60,10 +60,17 @@ class NativeRunner:
         for _ in range(self.env.n_substeps):
             mujoco.mj_step(self.model, self.data)
         forces = native_contact_forces(self.model, self.data, self._geoms)
-        # The shared transition reads these fields of the physics state (contacts come as `forces`).
-        data = self.state.pipeline_state.replace(
-            qpos=self.data.qpos.copy(), qvel=self.data.qvel.copy(), ctrl=self.data.ctrl.copy(),
-            xpos=self.data.xpos.copy(), xmat=self.data.xmat.reshape(-1, 3, 3).copy(),
-            actuator_force=self.data.actuator_force.copy(), time=self.data.time)
+        data = with_native_fields(self.state.pipeline_state, self.data)
         self.state = self._transition(self.state, data, action, forces.astype(np.float32))
         return self.state
+
+
+def with_native_fields(mjx_data, data: mujoco.MjData):
+    """`mjx_data` with the fields the environments' transitions and cameras read copied from native `data`
+    (state, controls, actuator forces, body, geom and camera poses; contacts are passed separately)."""
+    return mjx_data.replace(
+        qpos=data.qpos.copy(), qvel=data.qvel.copy(), ctrl=data.ctrl.copy(),
+        xpos=data.xpos.copy(), xmat=data.xmat.reshape(-1, 3, 3).copy(),
+        geom_xpos=data.geom_xpos.copy(), geom_xmat=data.geom_xmat.reshape(-1, 3, 3).copy(),
+        cam_xpos=data.cam_xpos.copy(), cam_xmat=data.cam_xmat.reshape(-1, 3, 3).copy(),
+        actuator_force=data.actuator_force.copy(), time=data.time)

@@ -8,14 +8,27 @@ from typing import Callable
 from legged.envs.base import LeggedEnv
 from legged.envs.confined import ConfinedConfig, ConfinedEnv
 from legged.envs.flat import FlatConfig, FlatEnv
+from legged.soccer.config import SoccerSceneConfig
+from legged.soccer.task_config import SoccerConfig
 
-TASKS: dict[str, tuple[Callable[..., LeggedEnv], object]] = {
+
+def _soccer(config: SoccerConfig):
+    from legged.soccer.env import SoccerEnv  # imported on use: legged.soccer builds on legged.envs
+
+    return SoccerEnv(config)
+
+
+TASKS: dict[str, tuple[Callable[..., object], object]] = {
     "go1-flat": (FlatEnv, FlatConfig()),
     "confined-waypoints": (ConfinedEnv, ConfinedConfig(mode="waypoints")),
     "confined-goal": (ConfinedEnv, ConfinedConfig(mode="goal")),
     "confined-velocity": (ConfinedEnv, ConfinedConfig(mode="velocity")),
     "confined-skills": (ConfinedEnv, ConfinedConfig(mode="skills")),
+    "soccer-1v1": (_soccer, SoccerConfig()),
+    "soccer-2v2": (_soccer, SoccerConfig(scene=SoccerSceneConfig(players_per_team=2))),
+    "soccer-1v1-vision": (_soccer, SoccerConfig(vision=True)),
 }
+"""Soccer tasks make the multi-agent `SoccerEnv`; training wraps it in `legged.soccer.learner.LearnerView`."""
 
 
 class UnknownTaskError(KeyError):

@@ -8,6 +8,25 @@ def tracking(error_sq, sigma):
     return jnp.exp(-error_sq / sigma)
 
 
+def penalty_terms(scales, q, q_range, qd, last_qvel, dt, torque, action, last_action, collisions) -> dict:
+    """The penalty terms every task shares (weights from a PenaltyScales `scales`).
+
+    q, qd: joint positions and velocities; q_range: [n_joints, 2] joint limits (a joint beyond 95% of its
+    range is penalised by the excursion); torque: actuator forces; collisions: count of penalised contacts.
+    Works for one robot or, with a leading agent axis on every array, per agent (sums over the last axis).
+    """
+    lo, hi = q_range[..., 0], q_range[..., 1]
+    soft = 0.05 * (hi - lo)
+    limit = jnp.sum(jnp.clip(lo + soft - q, 0.0) + jnp.clip(q - hi + soft, 0.0), -1)
+    return {
+        "joint_acc": scales.joint_acc * jnp.sum(jnp.square((qd - last_qvel) / dt), -1),
+        "torques": scales.torques * jnp.sum(jnp.square(torque), -1),
+        "joint_limits": scales.joint_limits * limit,
+        "collisions": scales.collisions * collisions,
+        "action_rate": scales.action_rate * jnp.sum(jnp.square(action - last_action), -1),
+    }
+
+
 def wrap_angle(angle):
     """Angle wrapped to (-pi, pi]."""
     return jnp.arctan2(jnp.sin(angle), jnp.cos(angle))

@@ -13,8 +13,6 @@ import jax
 import jax.numpy as jnp
 from brax.envs.base import State
 
-from legged.envs.base import LeggedEnv
-
 
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass
@@ -60,7 +58,7 @@ class VectorEnv:
     Build it with `VectorEnv.of(env, num_envs)` to reuse the compiled functions of an earlier one.
     """
 
-    def __init__(self, env: LeggedEnv, num_envs: int):
+    def __init__(self, env, num_envs: int):
         if num_envs < 1:
             raise ValueError(f"num_envs must be >= 1, got {num_envs}")
         self.env, self.num_envs = env, num_envs
@@ -68,7 +66,7 @@ class VectorEnv:
         self.step = jax.jit(self._step)
 
     @classmethod
-    def of(cls, env: LeggedEnv, num_envs: int) -> "VectorEnv":
+    def of(cls, env, num_envs: int) -> "VectorEnv":
         """The VectorEnv of (env, num_envs), made once per environment object (compilation is slow)."""
         cache = env.__dict__.setdefault("_vector_envs", {})
         if num_envs not in cache:
@@ -85,8 +83,9 @@ class VectorEnv:
         state = jax.vmap(self.env.reset)(keys[1:])
         return Batch(state=state, keys=jax.random.split(keys[0], self.num_envs), sums=self._zero_sums(state))
 
-    def _step(self, batch: Batch, action: jax.Array) -> tuple[Batch, StepResult]:
-        nxt = jax.vmap(self.env.step)(batch.state, action)
+    def _step(self, batch: Batch, action: jax.Array, *env_args) -> tuple[Batch, StepResult]:
+        """Step every environment; `env_args` (e.g. a soccer opponent) go to every env's step unbatched."""
+        nxt = jax.vmap(lambda s, a: self.env.step(s, a, *env_args))(batch.state, action)
         done = nxt.done > 0
         sums = dict(batch.sums)
         sums["return"] = sums["return"] + nxt.reward

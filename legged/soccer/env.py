@@ -1,0 +1,221 @@
+"""Multi-agent MJX soccer: teams of OP3 humanoids, a leading agent axis on actions, observations, rewards.
+
+`SoccerEnv` is Brax-style (`reset(rng) -> State`, `step(state, actions) -> State`, pure, jittable,
+vmappable) with actions [n_agents, 20] (joint-position offsets from the default pose, as for every robot
+here). `State.obs` holds, per agent (leading axis): `state` (the deployable observation: proprioception
+plus the game in the agent's heading frame; proprioception only in vision mode), `privileged_state`
+(everything in `state` without noise plus ground truth for critics and teachers), and in vision mode
+`camera` ([n_agents, 4, H, W]: RGB and depth from the head camera). `State.reward` is [n_agents];
+`State.metrics` holds each weighted reward term as `reward/<term>` [n_agents] and the game's statistics.
+
+The game: a goal scores +-1 and play restarts from the kick-off poses (or the episode ends, with
+`end_on_goal`); a ball over a line outside a goal is put back at rest just inside that line; a robot
+falls when its torso is low or tilted (`end_on_fall` says whose fall ends the episode); the time limit is a
+truncation. `transition` is shared by MJX stepping and native MuJoCo stepping (legged.soccer.native).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from brax.envs.base import Env, State
+from mujoco import mjx
+
+from legged.robots.op3 import OP3
+from legged.robots.spec import RobotSpec
+from legged.sensors.raycam import render
+from legged.soccer import observe, rules
+from legged.soccer.layout import SoccerLayout
+from legged.soccer.pitch import goal_centres, kickoff_poses
+from legged.soccer.rewards import reward_terms
+from legged.soccer.scene import build_soccer_scene
+from legged.soccer.task_config import SoccerConfig
+from legged.soccer.vision import soccer_camera
+
+
+class SoccerEnv(Env):
+    """A soccer game of `config.scene.players_per_team` OP3s per team, stepped in MJX."""
+
+    def __init__(self, config: SoccerConfig = SoccerConfig(), robot: RobotSpec = OP3):
+        self.config, self.robot = config, robot
+        self.n_substeps = config.n_substeps
+        m = build_soccer_scene(config.scene)
+        m.opt.timestep = config.sim_dt
+        self.mj_model, self.mjx_model = m, mjx.put_model(m)
+        self.layout = layout = SoccerLayout.from_model(m, robot)
+        self.n_agents = layout.n_agents
+        self._team = layout.team
+        self._others = observe.others_of(layout)
+        self._goals = goal_centres(config.scene)
+        self._kickoff = jnp.asarray(kickoff_poses(config.scene), jnp.float32)
+        self._qpos0 = jnp.asarray(layout.kickoff_qpos(m, kickoff_poses(config.scene), robot), jnp.float32)
+        self._ctrl0 = jnp.asarray(layout.default_ctrl(m, robot), jnp.float32)
+        self._default_pose = jnp.asarray(robot.default_pose, jnp.float32)
+        self._ctrl_range = jnp.asarray(m.actuator_ctrlrange[layout.actuator_ids], jnp.float32)  # [A, J, 2]
+        joint_ids = np.searchsorted(m.jnt_qposadr, layout.joint_qpos_adr)
+        self._q_range = jnp.asarray(m.jnt_range[joint_ids], jnp.float32)  # [A, J, 2]
+        self._ball_radius = float(config.scene.ball_radius)
+        self.camera = soccer_camera(m, config.camera, layout) if config.vision else None
+        self._metric_shapes = None
+
+    # ----------------------------------------------------------------- Brax Env API
+    @property
+    def dt(self) -> float:
+        """Control period, seconds."""
+        return self.config.ctrl_dt
+
+    @property
+    def action_size(self) -> int:
+        """Actions per agent (the robot's joints); `step` takes [n_agents, action_size]."""
+        return self.robot.num_joints
+
+    @property
+    def observation_size(self) -> dict:
+        """Shape of each observation, agent axis included."""
+        shapes = jax.eval_shape(self.reset, jax.random.PRNGKey(0)).obs
+        return {k: v.shape for k, v in shapes.items()}
+
+    @property
+    def backend(self) -> str:
+        return "mjx"
+
+    def reset(self, rng: jax.Array) -> State:
+        """A new game: robots around their kick-off spots, the ball on the pitch (see SoccerConfig)."""
+        rng, k_start, k_noise = jax.random.split(rng, 3)
+        qpos, qvel = self.start_state(k_start)
+        data = self._pose(mjx.make_data(self.mjx_model).replace(qpos=qpos, qvel=qvel, ctrl=self._ctrl0))
+        info = self._initial_info(rng)
+        obs = self._observe(data, info, k_noise)
+        metrics = {k: jnp.zeros(s.shape, s.dtype) for k, s in self._metrics_structure().items()}
+        return State(data, obs, jnp.zeros(self.n_agents), jnp.float32(0.0), metrics, info)
+
+    def start_state(self, rng: jax.Array):
+        """qpos, qvel of a new game (rules.start_state); `reset(key)` uses the second of split(key, 3)."""
+        return rules.start_state(rng, self.config, self._qpos0, self._kickoff, self.layout,
+                                 self.robot.standing_height, self.mj_model.nv)
+
+    def step(self, state: State, action: jax.Array) -> State:
+        """One control step of every robot; `action` is [n_agents, action_size]."""
+        data = self.physics_step(state.pipeline_state, action)
+        return self.transition(state, data, action)
+
+    # ----------------------------------------------------------------- physics
+    def joint_targets(self, action: jax.Array) -> jax.Array:
+        """Full ctrl vector (PD targets of every actuator) for actions [n_agents, action_size]."""
+        a = jnp.clip(action, -self.config.action_clip, self.config.action_clip)
+        target = self._default_pose + self.robot.action_scale * a
+        target = jnp.clip(target, self._ctrl_range[..., 0], self._ctrl_range[..., 1])
+        return self._ctrl0.at[self.layout.actuator_ids].set(target)
+
+    def physics_step(self, data, action: jax.Array):
+        """Advance MJX physics by one control period with the actions' PD targets."""
+        data = data.replace(ctrl=self.joint_targets(action))
+        return jax.lax.scan(lambda d, _: (mjx.step(self.mjx_model, d), None), data, None, length=self.n_substeps)[0]
+
+    # ----------------------------------------------------------------- the game
+    def transition(self, state: State, data, action: jax.Array) -> State:
+        """Next State from stepped physics `data` (MJX or native): rules, rewards, restarts, observations."""
+        c = self.config
+        bad = ~(jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
+                & jnp.all(jnp.abs(data.qvel) < c.divergence_qvel))
+        data = jax.tree_util.tree_map(lambda new, old: jnp.where(bad, old, new), data, state.pipeline_state)
+        action = jnp.where(bad, 0.0, action)
+        info = dict(state.info)
+        info["rng"], k_noise = jax.random.split(info["rng"])
+        info["step"] = info["step"] + 1
+
+        b = observe.read_bodies(self.layout, data.qpos, data.qvel)
+        call = rules.call_ball(c.scene, b.ball_pos)
+        fallen = (b.pos[:, 2] < c.fall_height) | (b.up_z < c.flip_up_z)
+        torque = data.actuator_force[self.layout.actuator_ids]
+        terms = reward_terms(c.rewards, b, call, self._team, self._goals, fallen & ~info["fallen"], torque,
+                             action, info["last_action"], info["last_qvel"], self._q_range, self.dt)
+        reward = jnp.where(bad, 0.0, sum(terms.values()))
+        info["score"] = info["score"] + jnp.stack([call.home_scores, call.away_scores]).astype(jnp.int32)
+        info["out_of_play"] = info["out_of_play"] + call.out.astype(jnp.int32)
+        info["fallen"] = fallen
+        info["last_action"], info["last_qvel"] = action, b.qd
+
+        time_out = info["step"] >= c.episode_steps
+        ends_it = {"agent0": fallen[0], "any": jnp.any(fallen), "never": jnp.bool_(False)}[c.end_on_fall]
+        ended = bad | ends_it | (c.end_on_goal & call.goal)
+        done = ended | time_out
+        info["truncation"] = (time_out & ~ended).astype(jnp.float32)
+        data = self._restart(data, call, done)
+
+        metrics = {f"reward/{k}": v for k, v in terms.items()}
+        score = info["score"].astype(jnp.float32)
+        metrics.update(goals_home=score[0], goals_away=score[1],
+                       out_of_play=info["out_of_play"].astype(jnp.float32), fell=fallen.astype(jnp.float32),
+                       dist_to_ball=jnp.linalg.norm(b.ball_pos[:2] - b.pos[:, :2], axis=-1),
+                       ball_speed=jnp.linalg.norm(b.ball_vel[:2]), diverged=bad.astype(jnp.float32))
+        obs = self._observe(data, info, k_noise)
+        return state.replace(pipeline_state=data, obs=obs, reward=reward.astype(jnp.float32),
+                             done=done.astype(jnp.float32), metrics=metrics, info=info)
+
+    def _restart(self, data, call: rules.BallCall, done):
+        """Kick-off after a goal, ball back in play after it left the pitch (not when the episode ends)."""
+        c, lay = self.config, self.layout
+        goal = call.goal & ~done
+        out = call.out & ~done
+        qpos = jnp.where(goal, self._qpos0, data.qpos)  # _qpos0: every robot at its kick-off pose
+        qvel = jnp.where(goal, 0.0, data.qvel)
+        ball_now = data.qpos[lay.ball_qpos_adr:lay.ball_qpos_adr + 2]
+        ball_xy = jnp.where(goal, 0.0, rules.back_in_play(c.scene, ball_now, c.restart_inset))
+        placed_q, placed_v = rules.place_ball(qpos, qvel, lay.ball_qpos_adr, lay.ball_dof_adr, ball_xy,
+                                              self._ball_radius)
+        moved = goal | out
+        data = data.replace(qpos=jnp.where(moved, placed_q, qpos), qvel=jnp.where(moved, placed_v, qvel),
+                            ctrl=jnp.where(goal, self._ctrl0, data.ctrl))
+        if self.camera is None:
+            return data  # observations read qpos/qvel; the next mjx.step recomputes the kinematics
+        return jax.lax.cond(moved, self._pose, lambda d: d, data)
+
+    def _pose(self, data):
+        """Body, geom and camera poses for data's qpos (kinematics only: the observations and the camera
+        need no more; the next mjx.step computes the rest)."""
+        return mjx.camlight(self.mjx_model, mjx.kinematics(self.mjx_model, data))
+
+    # ----------------------------------------------------------------- observations
+    def _observe(self, data, info: dict, rng) -> dict:
+        c = self.config
+        b = observe.read_bodies(self.layout, data.qpos, data.qvel)
+        proprio = observe.proprioception(b, self._default_pose, info["last_action"])
+        game = observe.game_features(b, self._team, self._goals, self._others)
+        clean = jnp.concatenate([proprio, game], -1)
+        state = proprio if c.vision else clean
+        if c.noise.enabled:
+            n = c.noise
+            scale = jnp.concatenate([jnp.full(3, n.gravity), jnp.zeros(3), jnp.full(self.action_size, n.joint_pos),
+                                     jnp.full(self.action_size, n.joint_vel),
+                                     jnp.zeros(state.shape[-1] - 6 - 2 * self.action_size)])
+            state = state + scale * jax.random.uniform(rng, state.shape, minval=-1.0, maxval=1.0)
+        fraction = info["step"].astype(jnp.float32) / c.episode_steps
+        privileged = jnp.concatenate([clean, observe.privileged_features(b, self._team, info["score"], fraction)], -1)
+        obs = {"state": state, "privileged_state": privileged}
+        if self.camera is not None:
+            obs["camera"] = observe.camera_observation(render(self.camera, data), c.camera.max_depth)
+        return obs
+
+    @property
+    def policy_state_size(self) -> int:
+        """Length of the full egocentric feature vector (the state tasks' `state`): the first entries of
+        `privileged_state`, which frozen opponent policies read in every task."""
+        return observe.PROPRIO_SIZE + 10 + 4 * (self.n_agents - 1)
+
+    def _initial_info(self, rng) -> dict:
+        """Episode bookkeeping at the start of a game."""
+        zeros = jnp.zeros((self.n_agents, self.action_size))
+        return dict(rng=rng, step=jnp.int32(0), last_action=zeros, last_qvel=zeros, score=jnp.zeros(2, jnp.int32),
+                    fallen=jnp.zeros(self.n_agents, bool), out_of_play=jnp.int32(0), truncation=jnp.float32(0.0))
+
+    def _metrics_structure(self) -> dict:
+        """Shapes of `State.metrics` (traced once, without compiling)."""
+        if self._metric_shapes is None:
+            def probe(rng):
+                data = mjx.make_data(self.mjx_model).replace(qpos=self._qpos0)
+                state = State(data, {}, jnp.zeros(self.n_agents), jnp.float32(0.0), {}, self._initial_info(rng))
+                return self.transition(state, data, jnp.zeros((self.n_agents, self.action_size))).metrics
+            self._metric_shapes = jax.eval_shape(probe, jax.random.PRNGKey(0))
+        return self._metric_shapes

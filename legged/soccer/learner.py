@@ -1,0 +1,85 @@
+"""One player's view of a soccer game: the single-agent environment the training backends see.
+
+The learner controls agent 0 (home0, attacking +x). Every other robot (in 2v2 the learner's teammate too)
+acts from an `Opponent` passed to `step` as data (a frozen self-play snapshot or the script); without one
+the script plays. Observations, reward and per-term metrics are agent 0's; the game's statistics are
+reported from the learner's side (goals_for, goals_against).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+from brax.envs.base import Env, State
+
+from legged.sensors.raycam import render
+from legged.soccer.env import SoccerEnv
+from legged.soccer.opponents import Opponent, OpponentNet, opponent_actions, scripted_opponent
+from legged.soccer.vision import soccer_camera
+
+LEARNER = 0
+"""Agent index the learner controls."""
+
+
+class LearnerView(Env):
+    """Agent 0 of `game` as a Brax-style single-agent environment; `step(state, action, opponent=None)`."""
+
+    def __init__(self, game: SoccerEnv, net: OpponentNet = OpponentNet(), hidden: tuple[int, ...] = ()):
+        self.game, self.net = game, net
+        self.config, self.mj_model, self.robot = game.config, game.mj_model, game.robot
+        self.default_opponent = scripted_opponent(game.policy_state_size, game.action_size, hidden)
+        self._obs_size = None
+        self._camera = None
+
+    @property
+    def dt(self) -> float:
+        """Control period, seconds."""
+        return self.game.dt
+
+    @property
+    def action_size(self) -> int:
+        return self.game.action_size
+
+    @property
+    def observation_size(self) -> dict:
+        if self._obs_size is None:
+            shapes = jax.eval_shape(self.reset, jax.random.PRNGKey(0)).obs
+            self._obs_size = {k: v.shape for k, v in shapes.items()}
+        return self._obs_size
+
+    def observation_dims(self) -> dict:
+        """Size of each observation: an int for vectors, a (C, H, W) tuple for the camera image."""
+        return {k: int(s[0]) if len(s) == 1 else tuple(int(d) for d in s) for k, s in self.observation_size.items()}
+
+    @property
+    def backend(self) -> str:
+        return "mjx"
+
+    def camera_images(self, data) -> jax.Array:
+        """RGB image of the learner's head camera, [H, W, 3] uint8 (the ray renderer at the task's camera
+        size), for viewers; jittable. Available in every soccer task, with or without vision."""
+        if self._camera is None:
+            self._camera = soccer_camera(self.mj_model, self.config.camera, self.game.layout)
+        return render(self._camera, data)["rgb"][LEARNER]
+
+    def reset(self, rng: jax.Array) -> State:
+        return self._view(self.game.reset(rng))
+
+    def step(self, state: State, action: jax.Array, opponent: Opponent | None = None) -> State:
+        opponent = self.default_opponent if opponent is None else opponent
+        info = dict(state.info)
+        game_obs = info.pop("game_obs")
+        others = game_obs["privileged_state"][LEARNER + 1:, :self.game.policy_state_size]
+        actions = jnp.concatenate([action[None], opponent_actions(self.net, opponent, others,
+                                                                  self.robot.action_scale)])
+        game = State(state.pipeline_state, game_obs, jnp.zeros(self.game.n_agents), state.done, {}, info)
+        return self._view(self.game.step(game, actions))
+
+    def _view(self, game: State) -> State:
+        """Agent 0's share of a game State (the whole game's observations kept in info for the others)."""
+        metrics = {k: v[LEARNER] if v.ndim else v for k, v in game.metrics.items()
+                   if k not in ("goals_home", "goals_away")}
+        metrics.update(goals_for=game.metrics["goals_home"], goals_against=game.metrics["goals_away"])
+        info = {**game.info, "game_obs": game.obs}
+        obs = {k: v[LEARNER] for k, v in game.obs.items()}
+        return State(game.pipeline_state, obs, game.reward[LEARNER], game.done, metrics, info)

@@ -1,0 +1,113 @@
+"""Who drives the robots the learner does not control: a frozen policy given as data, or a script.
+
+An `Opponent` is a pytree of arrays (no Python objects), passed to `step` as an argument: swapping one
+snapshot of a pool for another changes data, not the compiled program. Its network is an MLP with an
+input normaliser, (obs - mean) / std, then Linear-activation layers, the actor layout of both training
+backends; `weight` 1 uses the network, 0 the scripted player. Every opponent reads the full egocentric
+features (`SoccerEnv.policy_state_size` first entries of `privileged_state`), so a state-task teacher can
+play against a vision student.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from legged.soccer.observe import PROPRIO_SIZE
+
+ACTIVATIONS = {"elu": jax.nn.elu, "relu": jax.nn.relu, "tanh": jnp.tanh, "swish": jax.nn.swish,
+               "silu": jax.nn.silu, "selu": jax.nn.selu}
+"""Hidden activations an opponent network may use, by the names the training configs use."""
+
+
+class Opponent(NamedTuple):
+    """A frozen player as data."""
+
+    weight: jax.Array
+    """1.0: act with the network; 0.0: act with the script."""
+    mean: jax.Array
+    """Input normaliser mean, [obs]."""
+    std: jax.Array
+    """Input normaliser divisor, [obs] (eps already added)."""
+    layers: tuple
+    """((w [in, out], b [out]), ...) from input to action."""
+
+
+@dataclasses.dataclass(frozen=True)
+class OpponentNet:
+    """The static half of an opponent network: how its layers are joined (not data)."""
+
+    activation: str = "elu"
+    """Hidden activation (ACTIVATIONS)."""
+    squash: bool = False
+    """Apply tanh to the output (Brax PPO's deterministic action); rsl-rl's actions are the raw mean."""
+
+    def __post_init__(self):
+        if self.activation not in ACTIVATIONS:
+            raise ValueError(f"unknown activation {self.activation!r}; one of {sorted(ACTIVATIONS)}")
+
+
+def network_opponent(mean, std, layers) -> Opponent:
+    """An opponent that plays with a network (numpy or jax arrays)."""
+    f32 = lambda x: jnp.asarray(x, jnp.float32)
+    return Opponent(jnp.float32(1.0), f32(mean), f32(std), tuple((f32(w), f32(b)) for w, b in layers))
+
+
+def scripted_opponent(obs_size: int, action_size: int, hidden: tuple[int, ...] = ()) -> Opponent:
+    """The scripted player, shaped like a network of `hidden` layers so it can share a pool's structure."""
+    sizes = (obs_size, *hidden, action_size)
+    layers = tuple((jnp.zeros((a, b)), jnp.zeros(b)) for a, b in zip(sizes[:-1], sizes[1:]))
+    return Opponent(jnp.float32(0.0), jnp.zeros(obs_size), jnp.ones(obs_size), layers)
+
+
+def network_actions(net: OpponentNet, opp: Opponent, obs) -> jax.Array:
+    """The network's deterministic actions for observations [..., obs]."""
+    x = (obs - opp.mean) / opp.std
+    for i, (w, b) in enumerate(opp.layers):
+        x = x @ w + b
+        if i < len(opp.layers) - 1:
+            x = ACTIVATIONS[net.activation](x)
+    return jnp.tanh(x) if net.squash else x
+
+
+def scripted_actions(obs, action_scale: float, head_pan: int = 0, head_tilt: int = 1) -> jax.Array:
+    """The scripted player: stands in its default pose and keeps its head on the ball (pan toward the
+    ball's bearing, tilt toward its depression), like a goalkeeper that does not move. A weak, fixed
+    reference opponent for evaluation; its actions are [..., 20]."""
+    ball = obs[..., PROPRIO_SIZE:PROPRIO_SIZE + 3]  # ball position in the heading frame
+    bearing = jnp.arctan2(ball[..., 1], ball[..., 0])
+    depression = jnp.arctan2(jnp.maximum(0.45 - ball[..., 2], 0.0), jnp.linalg.norm(ball[..., :2], axis=-1))
+    actions = jnp.zeros(obs.shape[:-1] + (20,))
+    actions = actions.at[..., head_pan].set(jnp.clip(bearing, -1.2, 1.2) / action_scale)
+    return actions.at[..., head_tilt].set(-jnp.clip(depression, 0.0, 0.9) / action_scale)
+
+
+def opponent_actions(net: OpponentNet, opp: Opponent, obs, action_scale: float) -> jax.Array:
+    """Actions of the robots an `Opponent` drives, for their observations [..., policy_state_size]."""
+    return jnp.where(opp.weight > 0.5, network_actions(net, opp, obs), scripted_actions(obs, action_scale))
+
+
+def stack_opponents(opponents) -> Opponent:
+    """A pool of opponents of one structure as one pytree with a leading pool axis."""
+    return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *opponents)
+
+
+def pick(pool: Opponent, index) -> Opponent:
+    """Member `index` of a stacked pool."""
+    return jax.tree_util.tree_map(lambda x: x[index], pool)
+
+
+def opponent_to_numpy(opp: Opponent) -> dict:
+    """A picklable copy (for checkpoints)."""
+    return {"weight": float(opp.weight), "mean": np.asarray(opp.mean), "std": np.asarray(opp.std),
+            "layers": [(np.asarray(w), np.asarray(b)) for w, b in opp.layers]}
+
+
+def opponent_from_numpy(d: dict) -> Opponent:
+    """The inverse of `opponent_to_numpy`."""
+    opp = network_opponent(d["mean"], d["std"], d["layers"])
+    return opp._replace(weight=jnp.float32(d["weight"]))

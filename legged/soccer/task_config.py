@@ -1,0 +1,77 @@
+"""Configuration of the soccer environments: the game's rules, its rewards and what the players see."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Literal
+
+from legged.envs.config import EnvConfig, PenaltyScales
+from legged.robots.op3 import OP3_CTRL_DT
+from legged.sensors.raycam import RayCameraConfig
+from legged.soccer.config import SoccerSceneConfig
+
+
+@dataclasses.dataclass(frozen=True)
+class SoccerRewards:
+    """Per-agent reward weights: the sparse goal reward and shaping terms after dm_control's soccer statistics."""
+
+    goal: float = 1.0
+    """+1 when the agent's team scores, -1 when it concedes (times this)."""
+    vel_to_ball: float = 0.05
+    """Times the torso's horizontal velocity toward the ball, m/s."""
+    ball_vel_to_goal: float = 0.1
+    """Times the ball's horizontal velocity toward the opponent goal, m/s (the same for both teammates)."""
+    upright: float = 0.5
+    """Times the z component of the torso's up axis (1 upright). The episode ends at the learner's fall, so
+    this must outweigh the penalties: with 0.02 and the penalties below at 5x, a CPU run learned to fall
+    at once (episodes shrank from 22 to 8 steps)."""
+    fall: float = -1.0
+    """On the control step the agent falls."""
+    penalties: PenaltyScales = PenaltyScales(joint_acc=-2.5e-8, torques=-2e-4, collisions=0.0, action_rate=-0.002)
+    """The penalties every task shares (collisions: unused, robots may touch the ball with any part)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class SoccerConfig(EnvConfig):
+    """A soccer game of OP3 teams (1v1 or 2v2) on the scene of `scene`."""
+
+    ctrl_dt: float = OP3_CTRL_DT
+    """Policy period, seconds (40 Hz; 5 physics steps)."""
+    episode_seconds: float = 20.0
+    """Time limit of an episode (a truncation), seconds."""
+    fall_height: float = 0.15
+    """A robot whose torso origin (hip level, 0.245 m when standing) is lower than this has fallen, metres."""
+    flip_up_z: float = 0.5
+    """A robot whose torso up axis has a z component below this (tilted beyond 60 degrees) has fallen."""
+    scene: SoccerSceneConfig = SoccerSceneConfig()
+    """Pitch, goals, ball, team sizes and colours."""
+    end_on_fall: Literal["agent0", "any", "never"] = "agent0"
+    """Which fall ends the episode (there is no get-up skill yet): agent 0's (the learner's in training),
+    any robot's, or none; a fallen robot that does not end it lies where it fell."""
+    end_on_goal: bool = False
+    """End the episode at a goal; otherwise play restarts from the kick-off poses."""
+    spawn_spread: float = 0.5
+    """At an episode's start each robot stands up to this far (metres, per axis) from its kick-off spot."""
+    spawn_yaw: float = 1.5708
+    """... and turned up to +-this (radians) from facing the opponent goal."""
+    random_ball: bool = True
+    """Episode start: the ball anywhere on the pitch `restart_inset` inside the lines (else on the centre spot)."""
+    restart_inset: float = 0.3
+    """A ball that leaves the pitch is put back this far inside the line it crossed, at rest, metres."""
+    vision: bool = False
+    """Give every agent its head camera image (observation 'camera') and a proprioceptive-only 'state'."""
+    camera: RayCameraConfig = RayCameraConfig()
+    """Size and appearance of the head camera images."""
+    rewards: SoccerRewards = SoccerRewards()
+    """Reward weights."""
+
+    def __post_init__(self):
+        if self.randomization.enabled:
+            raise ValueError("dynamics randomisation is not implemented for the soccer tasks; "
+                             "set env.randomization.enabled=false")
+        if self.end_on_fall not in ("agent0", "any", "never"):
+            raise ValueError(f"end_on_fall must be 'agent0', 'any' or 'never', got {self.end_on_fall!r}")
+        if self.spawn_spread < 0 or self.restart_inset < 0:
+            raise ValueError("spawn_spread and restart_inset must be non-negative")
+        if 2 * self.restart_inset >= min(self.scene.field_length, self.scene.field_width):
+            raise ValueError(f"restart_inset {self.restart_inset} does not fit on the pitch")

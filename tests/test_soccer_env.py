@@ -1,0 +1,166 @@
+"""The multi-agent soccer environments: shapes, the laws of the game, observations, opponents as data."""
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+import pytest
+
+from legged.envs import make
+from legged.soccer import observe
+from legged.soccer.opponents import OpponentNet, network_opponent, opponent_actions, scripted_opponent
+from legged.soccer.pitch import kickoff_poses
+
+
+@pytest.fixture(scope="module")
+def game():
+    """soccer-1v1 with a jitted batched reset and step and an unbatched transition."""
+    env = make("soccer-1v1")
+
+    class Game:
+        pass
+
+    g = Game()
+    g.env, g.reset, g.step = env, jax.jit(jax.vmap(env.reset)), jax.jit(jax.vmap(env.step))
+    g.transition = jax.jit(env.transition)
+    g.one = jax.tree_util.tree_map(lambda x: x[0], g.reset(jax.random.split(jax.random.PRNGKey(0), 2)))
+    return g
+
+
+def _with_ball(g, xyz, state=None):
+    """A state whose physics has the ball moved to xyz (and the transition's output from it)."""
+    state = g.one if state is None else state
+    adr = g.env.layout.ball_qpos_adr
+    data = state.pipeline_state.replace(qpos=state.pipeline_state.qpos.at[adr:adr + 3].set(jnp.asarray(xyz)))
+    return g.transition(state, data, jnp.zeros((g.env.n_agents, g.env.action_size)))
+
+
+def test_per_agent_shapes_and_no_nan_under_random_actions(game):
+    env = game.env
+    state = game.reset(jax.random.split(jax.random.PRNGKey(1), 2))
+    assert state.obs["state"].shape == (2, 2, env.policy_state_size) == (2, 2, 80)
+    assert state.obs["privileged_state"].shape == (2, 2, 97)
+    assert state.reward.shape == (2, 2)
+    key = jax.random.PRNGKey(2)
+    for _ in range(15):
+        key, k = jax.random.split(key)
+        state = game.step(state, jax.random.uniform(k, (2, 2, env.action_size), minval=-1.0, maxval=1.0))
+        for leaf in jax.tree_util.tree_leaves((state.obs, state.reward, state.metrics)):
+            assert bool(jnp.all(jnp.isfinite(leaf)))
+    terms = [k for k in state.metrics if k.startswith("reward/")]
+    assert {"reward/goal", "reward/vel_to_ball", "reward/ball_vel_to_goal", "reward/upright", "reward/fall",
+            "reward/torques", "reward/action_rate"} <= set(terms)
+    assert all(state.metrics[k].shape == (2, 2) for k in terms)
+    assert np.allclose(sum(state.metrics[k] for k in terms), state.reward, atol=1e-5)
+    assert float(state.metrics["diverged"].max()) == 0.0
+
+
+def test_mjx_game_physics_matches_native_mujoco(game):
+    """Two control steps of the 1v1 game (10 physics steps, every contact pair type) against mj_step."""
+    env = game.env
+    state = game.reset(jax.random.split(jax.random.PRNGKey(7), 2))
+    data = mujoco.MjData(env.mj_model)
+    data.qpos[:] = np.asarray(state.pipeline_state.qpos[0])
+    data.ctrl[:] = env.layout.default_ctrl(env.mj_model)
+    mujoco.mj_forward(env.mj_model, data)
+    for _ in range(2):
+        state = game.step(state, jnp.zeros((2, env.n_agents, env.action_size)))
+        for _ in range(env.n_substeps):
+            mujoco.mj_step(env.mj_model, data)
+    assert np.abs(np.asarray(state.pipeline_state.qpos[0]) - data.qpos).max() < 1e-3
+    assert np.abs(np.asarray(state.pipeline_state.qvel[0]) - data.qvel).max() < 2e-2
+
+
+def test_a_goal_scores_for_one_team_and_restarts_from_kickoff(game):
+    env, scene = game.env, game.env.config.scene
+    behind = scene.field_length / 2 + scene.ball_radius + 0.05
+    home_goal = _with_ball(game, [behind, 0.1, scene.ball_radius])  # into the away goal at +x: home scores
+    assert np.allclose(home_goal.metrics["reward/goal"], [1.0, -1.0])
+    assert np.array_equal(home_goal.info["score"], [1, 0]) and float(home_goal.done) == 0.0
+    lay = env.layout
+    qpos = np.asarray(home_goal.pipeline_state.qpos)
+    assert np.allclose(qpos[lay.ball_qpos_adr:lay.ball_qpos_adr + 3], [0.0, 0.0, scene.ball_radius])
+    assert np.allclose(qpos[lay.root_qpos_adr[:, None] + np.arange(2)], kickoff_poses(scene)[:, :2], atol=1e-6)
+    assert np.allclose(home_goal.pipeline_state.qvel, 0.0)
+    away_goal = _with_ball(game, [-behind, 0.0, scene.ball_radius])
+    assert np.allclose(away_goal.metrics["reward/goal"], [-1.0, 1.0])
+    assert np.array_equal(away_goal.info["score"], [0, 1])
+
+
+def test_a_ball_out_of_play_is_put_back_inside_the_line(game):
+    scene, inset = game.env.config.scene, game.env.config.restart_inset
+    adr = game.env.layout.ball_qpos_adr
+    over_touch = _with_ball(game, [1.0, scene.field_width / 2 + 0.2, scene.ball_radius])
+    wide_of_goal = _with_ball(game, [scene.field_length / 2 + 0.2, 1.0, scene.ball_radius])
+    for state, expected_xy in ((over_touch, [1.0, scene.field_width / 2 - inset]),
+                               (wide_of_goal, [scene.field_length / 2 - inset, 1.0])):
+        assert float(state.metrics["out_of_play"]) == 1.0
+        assert np.allclose(state.metrics["reward/goal"], 0.0)
+        assert np.allclose(state.pipeline_state.qpos[adr:adr + 2], expected_xy, atol=1e-6)
+    in_play = _with_ball(game, [1.0, 0.5, scene.ball_radius])
+    assert float(in_play.metrics["out_of_play"]) == 0.0
+
+
+def test_the_learners_fall_ends_the_episode_and_the_time_limit_truncates(game):
+    env = game.env
+    adr = env.layout.root_qpos_adr[1]
+    data = game.one.pipeline_state
+    opponent_down = game.transition(game.one, data.replace(qpos=data.qpos.at[adr + 2].set(0.1)),
+                                    jnp.zeros((2, env.action_size)))
+    assert np.array_equal(opponent_down.metrics["fell"], [0.0, 1.0]) and float(opponent_down.done) == 0.0
+    assert np.allclose(opponent_down.metrics["reward/fall"], [0.0, env.config.rewards.fall])
+    again = game.transition(opponent_down, opponent_down.pipeline_state, jnp.zeros((2, env.action_size)))
+    assert np.allclose(again.metrics["reward/fall"], 0.0)  # the fall penalty is paid once
+    learner = env.layout.root_qpos_adr[0]
+    learner_down = game.transition(game.one, data.replace(qpos=data.qpos.at[learner + 2].set(0.1)),
+                                   jnp.zeros((2, env.action_size)))
+    assert float(learner_down.done) == 1.0 and float(learner_down.info["truncation"]) == 0.0
+    last = game.one.replace(info={**game.one.info, "step": jnp.int32(env.config.episode_steps - 1)})
+    timed_out = game.transition(last, data, jnp.zeros((2, env.action_size)))
+    assert float(timed_out.done) == 1.0 and float(timed_out.info["truncation"]) == 1.0
+
+
+def test_egocentric_observations_are_the_same_for_mirrored_players(game):
+    """At a kick-off with the ball on the spot the two players see mirror images: identical features."""
+    env = game.env
+    lay = env.layout
+    qpos = env._qpos0
+    b = observe.read_bodies(lay, qpos, jnp.zeros(env.mj_model.nv))
+    features = np.asarray(observe.game_features(b, lay.team, env._goals, observe.others_of(lay)))
+    assert np.allclose(features[0], features[1], atol=1e-5)
+    assert np.allclose(features[0][:3], [1.0, 0.0, env.config.scene.ball_radius - env.robot.standing_height], atol=1e-5)
+    assert np.allclose(features[0][6:10], [-1.5, 0.0, 3.5, 0.0], atol=1e-5)  # own goal behind, opponent's ahead
+
+
+def test_others_come_teammates_first():
+    class Layout:
+        n_agents, team = 4, np.array([0, 0, 1, 1])
+    assert observe.others_of(Layout()).tolist() == [[1, 2, 3], [0, 2, 3], [3, 0, 1], [2, 0, 1]]
+
+
+def test_opponents_are_data_and_the_script_watches_the_ball():
+    obs = jnp.zeros((3, 80)).at[:, observe.PROPRIO_SIZE:observe.PROPRIO_SIZE + 3].set(jnp.array([1.0, 1.0, 0.0]))
+    scripted = scripted_opponent(80, 20, (8,))
+    actions = opponent_actions(OpponentNet(), scripted, obs, 0.3)
+    assert np.allclose(actions[:, 0], np.pi / 4 / 0.3, atol=1e-5)  # head pans 45 degrees toward the ball
+    assert np.all(actions[:, 1] < 0) and np.allclose(actions[:, 2:], 0.0)  # looks down, stands still
+    rng = np.random.default_rng(0)
+    net = network_opponent(np.zeros(80), np.ones(80), [(rng.normal(size=(80, 8)), np.zeros(8)),
+                                                       (rng.normal(size=(8, 20)), np.zeros(20))])
+    assert jax.tree_util.tree_structure(net) == jax.tree_util.tree_structure(scripted)
+    fn = jax.jit(lambda o, x: opponent_actions(OpponentNet(), o, x, 0.3))
+    a_script, a_net = fn(scripted, obs), fn(net, obs)
+    assert fn._cache_size() == 1  # swapping the opponent changed data, not the program
+    assert np.allclose(a_script, actions) and not np.allclose(a_net, a_script)
+
+
+
+def test_soccer_config_is_checked():
+    from legged.soccer.task_config import SoccerConfig
+
+    with pytest.raises(ValueError, match="end_on_fall must be"):
+        SoccerConfig(end_on_fall="sometimes")
+    with pytest.raises(ValueError, match="randomisation is not implemented"):
+        SoccerConfig(randomization=dataclasses.replace(SoccerConfig().randomization, enabled=True))

@@ -1,0 +1,90 @@
+"""Training the soccer tasks: self-play snapshots as opponents (data, no recompiling), the vision task's CNN
+actor, soccer evaluation figures, and the configuration checks that run before anything is built."""
+
+import numpy as np
+import pytest
+import torch
+
+from policies import training
+from policies.config import ConfigError, PPOConfig, TrainConfig, apply_overrides
+from policies.evaluate import summarize
+from policies.export import export_onnx
+from policies.policy_io import load_policy
+from policies.rsl_backend import build_ppo, dummy_observations, save_checkpoint
+from policies.rsl_vecenv import obs_groups
+from policies.run_dir import RunDir
+
+TINY = ["env.episode_seconds=0.25", "ppo.num_steps_per_env=5", "ppo.num_mini_batches=2", "checkpoint_every=1",
+        "ppo.actor_hidden=[16]", "ppo.critic_hidden=[16]"]
+"""2 envs x 5 steps = 10 env steps per iteration; 10-step episodes."""
+
+
+def _env(task: str):
+    return training.build_env(apply_overrides(TrainConfig(task=task, num_envs=2).resolved(), TINY))
+
+
+def test_self_play_snapshots_become_opponents_without_recompiling(tmp_path, monkeypatch):
+    env = _env("soccer-1v1")
+    monkeypatch.setattr(training, "build_env", lambda config: env)
+    traces, real_step = [], env.step
+    monkeypatch.setattr(env, "step", lambda *args: (traces.append(len(args)), real_step(*args))[1])
+    run_dir = tmp_path / "selfplay"
+    training.start_run("soccer-1v1", str(run_dir), num_envs=2, timesteps=30, progress=False,
+                       overrides=TINY + ["selfplay.snapshot_every=1", "selfplay.scripted_fraction=0.0"])
+    records = RunDir(run_dir).metrics()
+    assert [r["opponent"] for r in records][0] == -1  # the pool starts empty: the script plays
+    assert all(r["opponent"] >= 0 for r in records[1:]) and [r["opponent_pool"] for r in records] == [1, 2, 3]
+    payload = torch.load(RunDir(run_dir).latest_checkpoint(), weights_only=False)
+    snapshots = payload["opponent_pool"]["snapshots"]
+    assert len(snapshots) == 3 and snapshots[0]["weight"] == 1.0
+    assert snapshots[0]["layers"][0][0].shape == (env.game.policy_state_size, 16)
+    assert not np.allclose(snapshots[0]["layers"][0][0], snapshots[2]["layers"][0][0])  # the learner moved on
+    assert traces == [3]  # script and snapshots, all passed as data: the step was traced (compiled) once
+    ended = [r for r in records if r["episodes"]]
+    assert ended and {"episode_goals_for", "episode_goals_against", "episode_reward_goal"} <= set(ended[0])
+
+
+def test_camera_tasks_get_a_cnn_actor_that_saves_loads_and_acts(tmp_path):
+    """The vision task's actor (without compiling the MJX env: that path is the self-play test's)."""
+    sizes = {"state": 66, "privileged_state": 97, "camera": (4, 30, 40)}
+    ppo = PPOConfig(actor_hidden=(16,), critic_hidden=(16,))
+    alg = build_ppo(dummy_observations(sizes, 2), 2, 20, ppo, "cpu")
+    assert type(alg.get_policy()).__name__ == "CNNModel" and type(alg.critic).__name__ == "MLPModel"
+    assert obs_groups(camera=True) == {"actor": ["state", "camera"], "critic": ["privileged_state"]}
+    run = RunDir(tmp_path / "vision")
+    run.create(apply_overrides(TrainConfig(task="soccer-1v1-vision").resolved(),
+                               ["ppo.actor_hidden=[16]", "ppo.critic_hidden=[16]"]))
+    save_checkpoint(run, alg, 1, 10, sizes, 20)
+    policy, config = load_policy(run.path)
+    assert policy.obs_sizes["camera"] == (4, 30, 40) and config.self_play is False
+    rng = np.random.default_rng(0)
+    state = np.zeros((3, 66), np.float32)
+    actions = policy.act({"state": state, "camera": rng.random((3, 4, 30, 40), dtype=np.float32)})
+    assert actions.shape == (3, 20) and not np.allclose(actions[0], actions[1])  # the images matter
+    assert export_onnx(policy, tmp_path / "vision.onnx", samples=4)["max_abs_diff"] <= 1e-4
+
+
+def test_soccer_configs_fail_before_any_work():
+    with pytest.raises(ConfigError, match="needs --backend rsl"):
+        TrainConfig(task="soccer-1v1-vision", backend="brax").resolved()
+    with pytest.raises(ConfigError, match="selfplay.opponent=scripted"):
+        apply_overrides(TrainConfig(task="soccer-1v1", backend="brax").resolved(), ["selfplay.opponent=self-play"])
+    assert TrainConfig(task="soccer-1v1", backend="brax").resolved().self_play is False
+    assert TrainConfig(task="soccer-2v2").resolved().self_play is True
+    with pytest.raises(ConfigError, match="selfplay"):
+        apply_overrides(TrainConfig(task="soccer-1v1").resolved(), ["selfplay.pool_size=0"])
+
+
+def test_soccer_evaluation_figures():
+    finals = [{"return": 1.0, "length": 10, "goals_for": 2.0, "goals_against": 1.0, "fell": 0.0, "reward/goal": 1.0},
+              {"return": -1.0, "length": 4, "goals_for": 0.0, "goals_against": 0.0, "fell": 1.0, "reward/goal": 0.0}]
+    report = summarize(finals, confined=False)
+    assert report["win_rate"] == 0.5 and report["fall_rate"] == 0.5
+    assert report["goals_for_per_episode"] == 1.0 and report["goals_against_per_episode"] == 0.5
+
+
+def test_soccer_benchmark_arguments_are_checked(capsys):
+    from legged.cli import main
+
+    assert main(["bench", "soccer", "--team-sizes", "3", "--json"]) == 2
+    assert "--team-sizes takes 1 and/or 2" in capsys.readouterr().err
