@@ -85,7 +85,7 @@ class SceneView:
             if self.static[mesh.body]:
                 self._add_geom(scene, f"/world/geom{mesh.geom:04d}", mesh, -1,
                                data.geom_xpos[mesh.geom], _quat(data.geom_xmat[mesh.geom]))
-                if config.plane_grid and mesh.kind == "plane":
+                if config.plane_grid and mesh.kind == "plane" and mesh.rgba[3] > 0:  # not invisible walls
                     self._add_grid(scene, mesh, data)
         self._moving = np.flatnonzero(~self.static)
         for env in range(len(self.offsets)):
