@@ -12,9 +12,10 @@ import abc
 import jax
 import jax.numpy as jnp
 import numpy as np
-from brax.envs.base import Env, State
+from brax.envs.base import State
 from mujoco import mjx
 
+from legged.envs.api import MjxEnv
 from legged.envs.config import EnvConfig
 from legged.envs.contacts import MjxContactReader
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
@@ -53,7 +54,7 @@ def randomized_fields(base: dict, dr: dict, trunk: int, xp=jnp) -> dict:
                 actuator_gainprm=gain, actuator_biasprm=bias)
 
 
-class LeggedEnv(Env, abc.ABC):
+class LeggedEnv(MjxEnv, abc.ABC):
     """A Brax-compatible MJX environment for one legged robot on a terrain."""
 
     def __init__(self, robot: RobotSpec, terrain: Terrain, scene: SceneOptions, config: EnvConfig):
@@ -81,7 +82,6 @@ class LeggedEnv(Env, abc.ABC):
         self._base_fields = {k: jnp.asarray(getattr(m, k)) for k in (
             "body_mass", "body_inertia", "body_ipos", "pair_friction", "actuator_gainprm", "actuator_biasprm")}
         self._weight = float(m.body_subtreemass[self._trunk] * 9.81)
-        self._obs_size = None
 
     # ----------------------------------------------------------------- task hooks
     @abc.abstractmethod
@@ -130,31 +130,7 @@ class LeggedEnv(Env, abc.ABC):
         """Actuated joint velocities in policy order."""
         return data.qvel[self._vadr]
 
-    # ----------------------------------------------------------------- Brax Env API
-    @property
-    def dt(self) -> float:
-        """Control period, seconds."""
-        return self.config.ctrl_dt
-
-    @property
-    def action_size(self) -> int:
-        return self.robot.num_joints
-
-    @property
-    def observation_size(self):
-        if self._obs_size is None:
-            shapes = jax.eval_shape(self.reset, jax.random.PRNGKey(0)).obs
-            self._obs_size = {k: v.shape for k, v in shapes.items()}
-        return self._obs_size
-
-    def observation_dims(self) -> dict[str, int]:
-        """Length of each (flat) observation vector: {'state': n, 'privileged_state': m}."""
-        return {k: int(shape[0]) for k, shape in self.observation_size.items()}
-
-    @property
-    def backend(self) -> str:
-        return "mjx"
-
+    # ----------------------------------------------------------------- randomisation and physics
     def randomize(self, rng: jax.Array) -> dict:
         """Sample dynamics randomisation parameters (nominal values when disabled)."""
         c, nb, nu = self.config.randomization, self.mj_model.nbody, self.mj_model.nu

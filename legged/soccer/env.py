@@ -19,9 +19,10 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 import numpy as np
-from brax.envs.base import Env, State
+from brax.envs.base import State
 from mujoco import mjx
 
+from legged.envs.api import MjxEnv
 from legged.robots.op3 import OP3
 from legged.robots.spec import RobotSpec
 from legged.sensors.raycam import render
@@ -34,7 +35,7 @@ from legged.soccer.task_config import SoccerConfig
 from legged.soccer.vision import soccer_camera
 
 
-class SoccerEnv(Env):
+class SoccerEnv(MjxEnv):
     """A soccer game of `config.scene.players_per_team` OP3s per team, stepped in MJX."""
 
     def __init__(self, config: SoccerConfig = SoccerConfig(), robot: RobotSpec = OP3):
@@ -59,27 +60,7 @@ class SoccerEnv(Env):
         self.camera = soccer_camera(m, config.camera, layout) if config.vision else None
         self._metric_shapes = None
 
-    # ----------------------------------------------------------------- Brax Env API
-    @property
-    def dt(self) -> float:
-        """Control period, seconds."""
-        return self.config.ctrl_dt
-
-    @property
-    def action_size(self) -> int:
-        """Actions per agent (the robot's joints); `step` takes [n_agents, action_size]."""
-        return self.robot.num_joints
-
-    @property
-    def observation_size(self) -> dict:
-        """Shape of each observation, agent axis included."""
-        shapes = jax.eval_shape(self.reset, jax.random.PRNGKey(0)).obs
-        return {k: v.shape for k, v in shapes.items()}
-
-    @property
-    def backend(self) -> str:
-        return "mjx"
-
+    # ----------------------------------------------------------------- Brax Env API (dt, sizes: MjxEnv)
     def reset(self, rng: jax.Array) -> State:
         """A new game: robots around their kick-off spots, the ball on the pitch (see SoccerConfig)."""
         rng, k_start, k_noise = jax.random.split(rng, 3)

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
-from brax.envs.base import Env, State
+from brax.envs.base import State
 
+from legged.envs.api import MjxEnv
 from legged.sensors.raycam import render
 from legged.soccer.env import SoccerEnv
 from legged.soccer.opponents import Opponent, OpponentNet, opponent_actions, scripted_opponent
@@ -21,39 +22,14 @@ LEARNER = 0
 """Agent index the learner controls."""
 
 
-class LearnerView(Env):
+class LearnerView(MjxEnv):
     """Agent 0 of `game` as a Brax-style single-agent environment; `step(state, action, opponent=None)`."""
 
     def __init__(self, game: SoccerEnv, net: OpponentNet = OpponentNet(), hidden: tuple[int, ...] = ()):
         self.game, self.net = game, net
         self.config, self.mj_model, self.robot = game.config, game.mj_model, game.robot
         self.default_opponent = scripted_opponent(game.policy_state_size, game.action_size, hidden)
-        self._obs_size = None
         self._camera = None
-
-    @property
-    def dt(self) -> float:
-        """Control period, seconds."""
-        return self.game.dt
-
-    @property
-    def action_size(self) -> int:
-        return self.game.action_size
-
-    @property
-    def observation_size(self) -> dict:
-        if self._obs_size is None:
-            shapes = jax.eval_shape(self.reset, jax.random.PRNGKey(0)).obs
-            self._obs_size = {k: v.shape for k, v in shapes.items()}
-        return self._obs_size
-
-    def observation_dims(self) -> dict:
-        """Size of each observation: an int for vectors, a (C, H, W) tuple for the camera image."""
-        return {k: int(s[0]) if len(s) == 1 else tuple(int(d) for d in s) for k, s in self.observation_size.items()}
-
-    @property
-    def backend(self) -> str:
-        return "mjx"
 
     def camera_images(self, data) -> jax.Array:
         """RGB image of the learner's head camera, [H, W, 3] uint8 (the ray renderer at the task's camera
