@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import jax
+import jax.numpy as jnp
 from brax.envs.base import Env
 
 
@@ -34,3 +35,10 @@ class MjxEnv(Env):
     @property
     def backend(self) -> str:
         return "mjx"
+
+
+def reject_divergence(data, previous, limit: float):
+    """(bad, data): `bad` when stepped physics `data` has a NaN or |qvel| above `limit`; then `data` is
+    replaced by `previous` (the last good state), so a diverged environment never spreads NaNs."""
+    bad = ~(jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel)) & jnp.all(jnp.abs(data.qvel) < limit))
+    return bad, jax.tree_util.tree_map(lambda new, old: jnp.where(bad, old, new), data, previous)

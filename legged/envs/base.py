@@ -15,7 +15,7 @@ import numpy as np
 from brax.envs.base import State
 from mujoco import mjx
 
-from legged.envs.api import MjxEnv
+from legged.envs.api import MjxEnv, reject_divergence
 from legged.envs.config import EnvConfig
 from legged.envs.contacts import MjxContactReader
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
@@ -191,9 +191,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
     def transition(self, state: State, data, action: jax.Array, forces: jax.Array) -> State:
         """Next State from stepped physics `data` (MJX or native) and contact forces; pure and jittable."""
         cfg = self.config
-        bad = ~(jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
-                & jnp.all(jnp.abs(data.qvel) < cfg.divergence_qvel))
-        data = jax.tree_util.tree_map(lambda new, old: jnp.where(bad, old, new), data, state.pipeline_state)
+        bad, data = reject_divergence(data, state.pipeline_state, cfg.divergence_qvel)
         forces = jnp.where(bad, 0.0, forces)
         info = dict(state.info)
         info["rng"], k_noise = jax.random.split(info["rng"])

@@ -22,7 +22,7 @@ import numpy as np
 from brax.envs.base import State
 from mujoco import mjx
 
-from legged.envs.api import MjxEnv
+from legged.envs.api import MjxEnv, reject_divergence
 from legged.robots.op3 import OP3
 from legged.robots.spec import RobotSpec
 from legged.sensors.raycam import render
@@ -98,9 +98,7 @@ class SoccerEnv(MjxEnv):
     def transition(self, state: State, data, action: jax.Array) -> State:
         """Next State from stepped physics `data` (MJX or native): rules, rewards, restarts, observations."""
         c = self.config
-        bad = ~(jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel))
-                & jnp.all(jnp.abs(data.qvel) < c.divergence_qvel))
-        data = jax.tree_util.tree_map(lambda new, old: jnp.where(bad, old, new), data, state.pipeline_state)
+        bad, data = reject_divergence(data, state.pipeline_state, c.divergence_qvel)
         action = jnp.where(bad, 0.0, action)
         info = dict(state.info)
         info["rng"], k_noise = jax.random.split(info["rng"])
