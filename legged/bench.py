@@ -1,7 +1,9 @@
-"""Throughput benchmark: MJX env steps per second at several batch sizes, beside native MuJoCo and a peer."""
+"""Throughput benchmark: env steps per second of a task on MJX and on native MuJoCo at several batch sizes,
+beside bare native physics and (optionally) a peer, all measured in one run."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -9,10 +11,10 @@ import time
 
 import jax
 import jax.numpy as jnp
-import mujoco
 import numpy as np
 
-from legged.envs import make
+from legged.envs.vector import VectorEnv
+from legged.tasks import learner_env, make, task_entry
 
 
 def time_calls(fn, state, seconds: float) -> tuple[object, int, float]:
@@ -29,55 +31,99 @@ def time_calls(fn, state, seconds: float) -> tuple[object, int, float]:
     return state, calls, time.perf_counter() - t0
 
 
-def native_steps_per_s(env, seconds: float) -> float:
-    """Control steps per second of native MuJoCo stepping the same model at the same control rate."""
-    model = env.mj_model
-    data = mujoco.MjData(model)
-    state = jax.jit(env.reset)(jax.random.PRNGKey(0))
-    data.qpos[:] = np.asarray(state.pipeline_state.qpos)
-    data.ctrl[:] = np.asarray(state.pipeline_state.ctrl)
-    steps, t0 = 0, time.perf_counter()
+PHYSICS_CHOICES = ("mjx", "native", "rollout")
+"""What `legged bench env --physics` measures: the task on MJX, the task on native MuJoCo, and bare native
+physics of the same model (no observations, rewards or policy: the physical limit of these cores)."""
+
+
+def _random_actions(env, batch: int, seed: int, count: int = 8) -> list[jax.Array]:
+    """A few fixed random action batches in [-1, 1], cycled by the timing loops (no RNG in the loop)."""
+    rng = np.random.default_rng(seed)
+    return [jnp.asarray(rng.uniform(-1, 1, (batch, env.action_size)), jnp.float32) for _ in range(count)]
+
+
+def bench_vector(env, physics: str, batch: int, seconds: float, seed: int, threads: int) -> dict:
+    """env-steps/s of the auto-resetting vector env on one engine, with random actions."""
+    t0 = time.perf_counter()
+    vector = VectorEnv(env, batch, physics, threads)
+    actions = _random_actions(env, batch, seed)
+    state = vector.reset(jax.random.PRNGKey(seed))
+    state, _ = vector.step(state, actions[0])
+    jax.block_until_ready(state.state.reward)
+    compile_s = time.perf_counter() - t0
+    k = [0]
+
+    def advance(b):
+        k[0] += 1
+        return vector.step(b, actions[k[0] % len(actions)])[0]
+
+    state, calls, elapsed = time_calls(advance, state, seconds)
+    diverged = state.state.metrics.get("diverged")
+    return {"env_steps_per_s": round(calls * batch / elapsed, 1), "compile_s": round(compile_s, 2),
+            "finite": bool(jnp.all(jnp.isfinite(state.state.obs["state"]))),
+            "diverged_fraction": None if diverged is None else round(float(jnp.mean(diverged)), 4)}
+
+
+def _bench_rollout(env, batch: int, seconds: float, seed: int, threads: int) -> dict:
+    """Control steps per second of bare native physics: the task's model and spawns, random PD targets,
+    `n_substeps` substeps per control step, nothing else."""
+    from legged.envs.native import NativeEnvs
+
+    native = NativeEnvs(env, batch, threads)
+    state = native.reset(jax.random.split(jax.random.PRNGKey(seed), batch))
+    ctrls = [np.asarray(native.controls(state, a)) for a in _random_actions(env, batch, seed)]
+    physics, steps, t0 = native.physics, 0, time.perf_counter()
+    ctrl = physics.batch.bind("ctrl")
     while time.perf_counter() - t0 < seconds:
-        for _ in range(env.n_substeps):
-            mujoco.mj_step(model, data)
+        ctrl[:] = ctrls[steps % len(ctrls)]
+        physics.batch.step(nstep=physics.n_substeps)
         steps += 1
-    return steps / (time.perf_counter() - t0)
+    return {"env_steps_per_s": round(steps * batch / (time.perf_counter() - t0), 1), "compile_s": 0.0}
 
 
-def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0, progress=None) -> list[dict]:
-    """One record per batch size: env_steps_per_s, compile_s, native_steps_per_s, health of the batch."""
-    env = make(task)
-    native = native_steps_per_s(env, seconds)
-    reset, step = jax.jit(jax.vmap(env.reset)), jax.jit(jax.vmap(env.step))
+def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0, physics=("mjx", "native"),
+              threads: int | None = None, progress=None) -> list[dict]:
+    """One record per (physics, batch size): env_steps_per_s (the training env: soccer tasks step the
+    learner's view against the script), compile_s, and the ratios to MJX and to bare rollout physics
+    measured in the same run."""
+    from legged.envs.native import check_threads
+
+    entry = task_entry(task)
+    for p in physics:
+        if p not in PHYSICS_CHOICES:
+            raise ValueError(f"unknown physics {p!r}; choose from {', '.join(PHYSICS_CHOICES)}")
+        if p != "rollout":
+            entry.check(physics=p)
+    threads = check_threads(threads)
+    env = learner_env(entry, make(task))
     records = []
     for batch in batches:
-        if progress:
-            progress(f"{task}: batch {batch}: compiling")
-        keys = jax.random.split(jax.random.PRNGKey(seed), batch)
-        t0 = time.perf_counter()
-        state = reset(keys)
-        jax.block_until_ready(state)
-        reset_s = time.perf_counter() - t0
-        action = jnp.zeros((batch, env.action_size))
-        t0 = time.perf_counter()
-        compiled = step.lower(state, action).compile()
-        compile_s = time.perf_counter() - t0
-        state = compiled(state, action)
-        if progress:
-            progress(f"{task}: batch {batch}: timing for {seconds:.0f} s")
-        state, calls, elapsed = time_calls(lambda s: compiled(s, action), state, seconds)
-        records.append({
-            "task": task, "batch": batch, "env_steps_per_s": round(calls * batch / elapsed, 1),
-            "compile_s": round(compile_s, 2), "reset_compile_s": round(reset_s, 2),
-            "native_steps_per_s": round(native, 1), "ctrl_dt": env.dt, "sim_dt": env.config.sim_dt,
-            "backend": jax.default_backend(), "finite": bool(jnp.all(jnp.isfinite(state.pipeline_state.qpos))),
-            "mean_base_height": round(float(jnp.mean(state.metrics["base_height"])), 4),
-        })
+        by_physics = {}
+        for p in physics:
+            if progress:
+                progress(f"{task}: {p}, batch {batch}: compiling and timing for {seconds:.0f} s")
+            r = _bench_rollout(env, batch, seconds, seed, threads) if p == "rollout" else \
+                bench_vector(env, p, batch, seconds, seed, threads)
+            by_physics[p] = r = {"task": task, "batch": batch, "physics": p, **r,
+                                 "threads": threads if p != "mjx" else None, "ctrl_dt": env.dt,
+                                 "backend": jax.default_backend()}
+            records.append(r)
+        for p, r in by_physics.items():
+            for base in ("mjx", "rollout"):
+                if base in by_physics and base != p:
+                    r[f"ratio_vs_{base}"] = round(r["env_steps_per_s"] / by_physics[base]["env_steps_per_s"], 3)
     return records
 
 
-def bench_peer(python: str, script: str, batches: list[int], seconds: float) -> dict[int, dict]:
-    """Run MuJoCo Playground's Go1 rough-terrain benchmark (../shared/peers) and index it by batch."""
+def bench_peer(python: str, script: str | None, batches: list[int], seconds: float) -> dict[int, dict]:
+    """Run MuJoCo Playground's Go1 rough-terrain benchmark (legged/peers/playground.py, with the peer's
+    `python`) and index it by batch."""
+    from pathlib import Path
+
+    script = script or str(Path(__file__).with_name("peers") / "playground.py")
+    if not Path(python).is_file():
+        raise FileNotFoundError(f"peer python not found: {python} (build it with bash "
+                                f"{Path(__file__).with_name('peers') / 'setup_playground.sh'})")
     cmd = [python, script, ",".join(map(str, batches)), "--envs", "Go1JoystickRoughTerrain",
            "--seconds", str(seconds)]
     out = subprocess.run(cmd, capture_output=True, text=True, check=False)
@@ -91,7 +137,7 @@ def attach_peer(records: list[dict], peer: dict[int, dict]) -> None:
     """Add the peer's figure and our/peer ratio to each record measured at a batch the peer also ran."""
     for r in records:
         p = peer.get(r["batch"])
-        if p:
+        if p and r.get("physics") == "mjx":
             r["peer"] = p["env"]
             r["peer_env_steps_per_s"] = p["env_steps_per_s"]
             r["ratio_vs_peer"] = round(r["env_steps_per_s"] / p["env_steps_per_s"], 3)
@@ -99,9 +145,50 @@ def attach_peer(records: list[dict], peer: dict[int, dict]) -> None:
 
 def print_table(records: list[dict], file=sys.stdout) -> None:
     """Human-readable table of benchmark records."""
-    print(f"{'task':22s} {'batch':>6s} {'env steps/s':>12s} {'compile s':>10s} {'native/s':>9s} {'peer/s':>9s} {'ratio':>6s}",
-          file=file)
+    print(f"{'task':20s} {'physics':8s} {'batch':>6s} {'env steps/s':>12s} {'compile s':>10s} {'vs mjx':>7s} "
+          f"{'vs rollout':>10s} {'peer/s':>8s}", file=file)
+    nan = float("nan")
     for r in records:
-        print(f"{r['task']:22s} {r['batch']:6d} {r['env_steps_per_s']:12.0f} {r['compile_s']:10.1f} "
-              f"{r['native_steps_per_s']:9.0f} {r.get('peer_env_steps_per_s', float('nan')):9.0f} "
-              f"{r.get('ratio_vs_peer', float('nan')):6.2f}", file=file)
+        print(f"{r['task']:20s} {r['physics']:8s} {r['batch']:6d} {r['env_steps_per_s']:12.0f} {r['compile_s']:10.1f} "
+              f"{r.get('ratio_vs_mjx', nan):7.2f} {r.get('ratio_vs_rollout', nan):10.2f} "
+              f"{r.get('peer_env_steps_per_s', nan):8.0f}", file=file)
+
+
+def soak(task: str, steps: int, batch: int = 256, seed: int = 0, physics: str = "native",
+         threads: int | None = None, progress=None) -> dict:
+    """Stress a task: `steps` env steps of random actions, half of them extreme (+-action_clip, bang-bang),
+    with domain randomisation on where the task has it. Counts the non-finite values that reach a learner
+    (observations and rewards after auto-reset), the episodes ended by divergence, and all episodes."""
+    entry = task_entry(task)
+    entry.check(physics=physics)
+    config = entry.config
+    if entry.kind != "soccer":  # soccer has no dynamics randomisation yet
+        config = dataclasses.replace(config, randomization=dataclasses.replace(config.randomization, enabled=True))
+    env = learner_env(entry, make(task, config))
+    vector = VectorEnv(env, batch, physics, threads)
+    rng = np.random.default_rng(seed)
+    clip = float(env.config.action_clip)
+    state = vector.reset(jax.random.PRNGKey(seed))
+    non_finite = episodes = diverged = 0
+    t0, done_steps, k = time.perf_counter(), 0, 0
+    while done_steps < steps:
+        if k % 2:
+            action = clip * np.sign(rng.uniform(-1, 1, (batch, env.action_size)))
+        else:
+            action = rng.uniform(-1, 1, (batch, env.action_size))
+        state, result = vector.step(state, jnp.asarray(action, jnp.float32))
+        leaves = [np.asarray(x) for x in jax.tree_util.tree_leaves((result.obs, result.reward))]
+        non_finite += int(sum((~np.isfinite(x)).sum() for x in leaves))
+        ended = np.asarray(result.done)
+        episodes += int(ended.sum())
+        if "diverged" in result.finished:
+            diverged += int((np.asarray(result.finished["diverged"]) > 0).sum())
+        done_steps += batch
+        k += 1
+        if progress and k % 200 == 0:
+            progress(f"{task}: {done_steps:,} / {steps:,} steps, {episodes} episodes, {diverged} diverged")
+    elapsed = time.perf_counter() - t0
+    return {"task": task, "physics": physics, "batch": batch, "env_steps": done_steps,
+            "randomization": entry.kind != "soccer",
+            "non_finite_values": non_finite, "episodes": episodes, "diverged_episodes": diverged,
+            "env_steps_per_s": round(done_steps / elapsed, 1), "seed": seed}

@@ -7,16 +7,30 @@ import json
 import sys
 
 
-def _ints(minimum: int):
-    """Parser of comma-separated integers >= minimum (for argparse `type=`)."""
+def _ints(minimum: int, maximum: int = 10**9):
+    """Parser of comma-separated integers in [minimum, maximum] (for argparse `type=`)."""
 
     def parse(text: str) -> list[int]:
         try:
             values = [int(v) for v in text.split(",") if v.strip()]
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from None
-        if not values or min(values) < minimum:
-            raise argparse.ArgumentTypeError(f"expected comma-separated integers >= {minimum}, got {text!r}")
+        if not values or min(values) < minimum or max(values) > maximum:
+            raise argparse.ArgumentTypeError(f"expected comma-separated integers from {minimum} to {maximum:,}, "
+                                             f"got {text!r}")
+        return values
+
+    return parse
+
+
+def _choices(*allowed: str):
+    """Parser of a comma-separated subset of `allowed` names (for argparse `type=`)."""
+
+    def parse(text: str) -> list[str]:
+        values = [v.strip() for v in text.split(",") if v.strip()]
+        unknown = [v for v in values if v not in allowed]
+        if not values or unknown:
+            raise argparse.ArgumentTypeError(f"choose from {', '.join(allowed)} (comma-separated), got {text!r}")
         return values
 
     return parse
@@ -50,8 +64,8 @@ def _xyz(text: str) -> list[float]:
         values = [float(v) for v in text.split(",")]
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected X,Y,Z in metres, got {text!r}") from None
-    if len(values) != 3:
-        raise argparse.ArgumentTypeError(f"expected three comma-separated numbers X,Y,Z, got {text!r}")
+    if len(values) != 3 or not all(abs(v) < 1e6 for v in values):  # NaN fails here too
+        raise argparse.ArgumentTypeError(f"expected three finite comma-separated numbers X,Y,Z, got {text!r}")
     return values
 
 
@@ -123,23 +137,41 @@ def _add_planner_options(parser) -> None:
 
     parser.add_argument("--planner", default="rrtconnect",
                         help=f"OMPL planner: {', '.join(PLANNERS)} (RRT*, BIT* style names work too)")
-    parser.add_argument("--time-limit", type=float, default=5.0, help="seconds the planner may search")
-    parser.add_argument("--spacing", type=float, default=0.5, help="largest distance between waypoints, m")
-    parser.add_argument("--planner-seed", type=int, default=0, help="seed of OMPL's sampling")
+    parser.add_argument("--time-limit", type=_bounded_float(0.0, 3600.0), default=5.0,
+                        help="seconds the planner may search")
+    parser.add_argument("--spacing", type=_bounded_float(0.01, 10.0), default=0.5,
+                        help="largest distance between waypoints, m")
+    parser.add_argument("--planner-seed", type=_bounded_int(0, 2**31 - 1), default=0, help="seed of OMPL's sampling")
 
 
 def cmd_bench(args) -> int:
     from legged.bench import attach_peer, bench_env, bench_peer, print_table
-    from legged.envs import default_config
+    from legged.tasks import default_config
 
     default_config(args.task)  # unknown task -> clear error before any compilation
     progress = None if args.quiet else (lambda msg: print(f"[bench] {msg}", file=sys.stderr, flush=True))
-    records = bench_env(args.task, args.batch, args.seconds, progress=progress)
+    records = bench_env(args.task, args.batch, args.seconds, physics=args.physics, threads=args.threads or None,
+                        progress=progress)
     if args.peer_python:
         if progress:
             progress("running the Playground peer in the same run")
         attach_peer(records, bench_peer(args.peer_python, args.peer_script, args.batch, args.seconds))
     return _print_records(records, args.json, print_table)
+
+
+def cmd_bench_soak(args) -> int:
+    from legged.bench import soak
+
+    progress = None if args.quiet else (lambda msg: print(f"[soak] {msg}", file=sys.stderr, flush=True))
+    records = [soak(task, args.steps, args.batch, args.seed, args.physics, args.threads or None, progress)
+               for task in args.tasks]
+    if args.json:
+        print(json.dumps(records))
+    else:
+        for r in records:
+            print(f"{r['task']:20s} {r['env_steps']:>10,} steps  non-finite values {r['non_finite_values']}  "
+                  f"episodes {r['episodes']}  diverged {r['diverged_episodes']}  {r['env_steps_per_s']:.0f} steps/s")
+    return 0
 
 
 def cmd_bench_soccer(args) -> int:
@@ -150,8 +182,67 @@ def cmd_bench_soccer(args) -> int:
     cameras = {"off": (False,), "on": (True,), "both": (False, True)}[args.camera]
     progress = None if args.quiet else (lambda msg: print(f"[bench] {msg}", file=sys.stderr, flush=True))
     records = bench_soccer(args.team_sizes, cameras, args.batch, args.seconds, peer=not args.no_peer,
-                           peer_steps=args.peer_steps, progress=progress)
+                           peer_steps=args.peer_steps, physics=args.physics, threads=args.threads or None,
+                           progress=progress)
     return _print_records(records, args.json, print_soccer_table)
+
+
+def _add_physics_options(parser, default: str = "mjx") -> None:
+    parser.add_argument("--physics", choices=["mjx", "native"], default=default,
+                        help="physics engine: mjx (JAX; for accelerators) or native (MuJoCo's C engine; fastest on a CPU)")
+    parser.add_argument("--threads", type=_positive_int, default=0, metavar="N",
+                        help="CPU threads of native physics and torch (default: every core)")
+
+
+def _task_names(text: str) -> list[str]:
+    """Comma-separated registered task names (for argparse `type=`)."""
+    from legged.tasks import TASKS
+
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    unknown = [t for t in names if t not in TASKS]
+    if not names or unknown:
+        raise argparse.ArgumentTypeError(f"unknown task(s) {unknown or text!r}; known: {', '.join(sorted(TASKS))}")
+    return names
+
+
+def _bounded_int(lo: int, hi: int):
+    """Parser of a whole number in [lo, hi] (for argparse `type=`): absurd values fail at once."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be between {lo:,} and {hi:,}, got {value:,}")
+        return value
+
+    return parse
+
+
+def _bounded_float(lo: float, hi: float):
+    """Parser of a finite number in (lo, hi] (for argparse `type=`)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+        if not lo < value <= hi:  # NaN fails here too
+            raise argparse.ArgumentTypeError(f"must be greater than {lo:g} and at most {hi:g}, got {text}")
+        return value
+
+    return parse
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
 
 
 def cmd_train(args) -> int:
@@ -165,7 +256,8 @@ def cmd_train(args) -> int:
         if not args.task:
             raise ValueError("name a task (see `legged tasks`) or continue a run with --resume DIR")
         record = start_run(args.task, args.run_dir, backend=args.backend, num_envs=args.num_envs,
-                           timesteps=args.timesteps, seed=args.seed, overrides=args.set, progress=not args.quiet)
+                           timesteps=args.timesteps, seed=args.seed, overrides=args.set, progress=not args.quiet,
+                           physics=args.physics, threads=args.threads)
     print(json.dumps(record))
     return 0
 
@@ -173,8 +265,8 @@ def cmd_train(args) -> int:
 def cmd_eval(args) -> int:
     import dataclasses
 
-    from legged.envs.confined import ConfinedConfig
-    from policies.evaluate import evaluate_mjx, evaluate_native, held_out, summarize
+    from legged.tasks import task_entry
+    from policies.evaluate import evaluate, held_out, summarize
     from policies.policy_io import load_policy
     from policies.run_dir import check_compatible
     from policies.training import build_env
@@ -182,13 +274,31 @@ def cmd_eval(args) -> int:
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     policy, config = load_policy(args.run_dir, args.checkpoint)
-    env = build_env(dataclasses.replace(config, env=held_out(config.env)))
+    env = build_env(dataclasses.replace(config, env=held_out(config.task, config.env)))
     check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
-    runner = evaluate_native if args.native else evaluate_mjx
-    finals = runner(env, policy, args.episodes, args.seed, progress=not args.quiet)
-    report = dict(summarize(finals, isinstance(config.env, ConfinedConfig)), physics="native" if args.native else "mjx",
+    finals = evaluate(env, policy, args.episodes, args.seed, args.physics, args.num_envs, args.threads or None,
+                      progress=not args.quiet)
+    confined = task_entry(config.task).kind == "confined"
+    report = dict(summarize(finals, confined), physics=args.physics, seed=args.seed,
                   checkpoint=str(policy.checkpoint), trained_steps=policy.step, task=config.task)
     print(json.dumps(report) if args.json else json.dumps(report, indent=2))
+    return 0
+
+
+def cmd_convert(args) -> int:
+    from policies.convert import convert_run
+
+    report = convert_run(args.run_dir, args.trust_pickles)
+    print(json.dumps(report) if args.json else f"[convert] {len(report['converted'])} checkpoint(s) converted in "
+          f"{report['run']}")
+    return 0
+
+
+def cmd_plot(args) -> int:
+    from policies.plots import plot_run
+
+    path = plot_run(args.run_dir, args.y, args.x, args.out, args.hline)
+    print(json.dumps({"plot": str(path)}) if args.json else f"[plot] wrote {path}")
     return 0
 
 
@@ -205,14 +315,13 @@ def cmd_export(args) -> int:
 
 
 def cmd_camera(args) -> int:
-    from legged.envs import default_config, make
     from legged.soccer.states import game_start
-    from legged.soccer.task_config import SoccerConfig
     from legged.soccer.vision import write_camera_images
+    from legged.tasks import TASKS, make, task_entry
 
-    if not isinstance(default_config(args.task), SoccerConfig):  # unknown names fail here too
-        raise ValueError(f"{args.task!r} is not a soccer task; soccer tasks: soccer-1v1, soccer-1v1-vision, "
-                         "soccer-2v2")
+    if task_entry(args.task).kind != "soccer":  # unknown names fail here too
+        soccer = sorted(n for n, e in TASKS.items() if e.kind == "soccer")
+        raise ValueError(f"{args.task!r} is not a soccer task; soccer tasks: {', '.join(soccer)}")
     env = make(args.task)
     report = write_camera_images(env.mj_model, game_start(env, args.seed), args.out, env.config.camera)
     report = dict(report, task=args.task, seed=args.seed)
@@ -226,10 +335,16 @@ def cmd_camera(args) -> int:
 
 
 def cmd_tasks(args) -> int:
-    from legged.envs import TASKS
+    from legged.tasks import TASKS
 
-    for name in sorted(TASKS):
-        print(name)
+    rows = [{"task": e.name, "kind": e.kind, "robot": e.robot.name, "physics": list(e.physics),
+             "backends": list(e.backends), "vision": e.vision} for e in TASKS.values()]
+    if args.json:
+        print(json.dumps(rows))
+        return 0
+    for r in rows:
+        print(f"{r['task']:20s} {r['kind']:11s} {r['robot']:5s} physics {','.join(r['physics']):11s} "
+              f"backends {','.join(r['backends'])}")
     return 0
 
 
@@ -237,7 +352,7 @@ def cmd_demo(args) -> int:
     from legged.demo import run_demo
 
     view = {"host": args.host, "port": args.port} if args.view else None
-    return run_demo(args.out, args.seconds, args.seed, args.difficulty, view=view)
+    return run_demo(args.out, args.seconds, args.seed, args.difficulty, view=view, physics=args.physics)
 
 
 def cmd_view(args) -> int:
@@ -245,7 +360,7 @@ def cmd_view(args) -> int:
     from web.source import ViewRequest, resolve
 
     request = ViewRequest(run_dir=args.run_dir, task=args.task, checkpoint=args.checkpoint, trajectory=args.trajectory,
-                          num_envs=args.num_envs, seed=args.seed, steps=args.steps, host=args.host,
+                          num_envs=args.num_envs, physics=args.physics, seed=args.seed, steps=args.steps, host=args.host,
                           port=None if args.save else args.port)
     resolved = resolve(request, log=lambda msg: print(msg, flush=True))
     if args.save:
@@ -266,59 +381,88 @@ def cmd_view(args) -> int:
 def _add_server_options(parser, port: int = 8080) -> None:
     parser.add_argument("--host", default="127.0.0.1",
                         help="address to bind (default 127.0.0.1, this machine only; 0.0.0.0 exposes it)")
-    parser.add_argument("--port", type=int, default=port, help="port to bind (0: any free port)")
+    parser.add_argument("--port", type=_bounded_int(0, 65535), default=port, help="port to bind (0: any free port)")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: `legged <command>: error: <cause>` on stderr, exit code 2 (no usage
+    dump; `legged <command> --help` shows it)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message}\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="legged", description="Legged-robot RL in MuJoCo/MJX.")
-    sub = p.add_subparsers(dest="command", required=True)
+    p = _Parser(prog="legged", description="Legged-robot RL in MuJoCo/MJX.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     w = sub.add_parser("world", help="generate a confined world (world.npz + world.xml)")
-    w.add_argument("--seed", type=int, default=0)
-    w.add_argument("--difficulty", type=int, default=0, help="0/1/2 give 3/4/5 m tunnels; higher is longer")
+    w.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0)
+    w.add_argument("--difficulty", type=_bounded_int(0, 20), default=0, help="0/1/2 give 3/4/5 m tunnels; higher is longer")
     w.add_argument("--out", required=True, help="output directory")
     w.add_argument("--json", action="store_true", help="print a JSON summary")
     w.set_defaults(fn=cmd_world)
 
     b = sub.add_parser("bench", help="benchmarks")
     bsub = b.add_subparsers(dest="what", required=True)
-    be = bsub.add_parser("env", help="environment steps per second (MJX) beside native MuJoCo")
+    be = bsub.add_parser("env", help="environment steps per second on MJX and native MuJoCo, beside bare physics")
     be.add_argument("--task", default="confined-waypoints")
-    be.add_argument("--batch", type=_ints(1), default=[1, 64, 256], help="comma-separated batch sizes")
-    be.add_argument("--seconds", type=float, default=3.0, help="timed seconds per batch size")
+    be.add_argument("--batch", type=_ints(1, 65536), default=[1, 64, 256], help="comma-separated batch sizes")
+    be.add_argument("--physics", type=_choices("mjx", "native", "rollout"), default=["mjx", "native", "rollout"],
+                    help="comma-separated: mjx, native (the task on each engine), rollout (bare native physics)")
+    be.add_argument("--threads", type=_positive_int, default=0, metavar="N",
+                    help="threads of native physics (default: every core)")
+    be.add_argument("--seconds", type=_bounded_float(0.0, 3600.0), default=3.0, help="timed seconds per batch size")
     be.add_argument("--peer-python", default=None,
                     help="python of the MuJoCo Playground peer (../shared/peers); adds ratio_vs_peer")
-    be.add_argument("--peer-script", default="../shared/peers/bench_playground.py")
+    be.add_argument("--peer-script", default=None,
+                    help="the peer's benchmark script (default: legged/peers/playground.py of this install)")
     be.add_argument("--json", action="store_true", help="print a JSON list, one object per batch size")
     be.add_argument("--quiet", action="store_true", help="no progress messages")
     be.set_defaults(fn=cmd_bench)
+    sk = bsub.add_parser("soak", help="random and extreme actions under randomisation: non-finite values and "
+                                      "divergences that reach the learner")
+    sk.add_argument("--tasks", type=_task_names, default=["confined-waypoints", "soccer-1v1"],
+                    help="comma-separated tasks")
+    sk.add_argument("--steps", type=_bounded_int(1, 10**9), default=1_000_000, help="env steps per task")
+    sk.add_argument("--batch", type=_bounded_int(1, 65536), default=256)
+    sk.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0)
+    sk.add_argument("--physics", choices=["mjx", "native"], default="native")
+    sk.add_argument("--threads", type=_positive_int, default=0, metavar="N", help="native physics threads")
+    sk.add_argument("--json", action="store_true")
+    sk.add_argument("--quiet", action="store_true")
+    sk.set_defaults(fn=cmd_bench_soak)
     bs = bsub.add_parser("soccer", help="soccer env steps per second (1v1, 2v2, with/without cameras) beside "
                                         "native MuJoCo and dm_control's soccer")
     bs.add_argument("--team-sizes", type=_ints(1), default=[1, 2], help="players per team: 1 and/or 2")
     bs.add_argument("--camera", choices=("off", "on", "both"), default="both", help="head cameras rendered")
-    bs.add_argument("--batch", type=_ints(1), default=[1, 16, 64], help="comma-separated batch sizes")
-    bs.add_argument("--seconds", type=float, default=3.0, help="timed seconds per measurement")
+    bs.add_argument("--batch", type=_ints(1, 65536), default=[1, 16, 64], help="comma-separated batch sizes")
+    bs.add_argument("--seconds", type=_bounded_float(0.0, 3600.0), default=3.0, help="timed seconds per measurement")
     bs.add_argument("--no-peer", action="store_true", help="skip dm_control's soccer")
-    bs.add_argument("--peer-steps", type=int, default=20, help="control steps timed per dm_control env")
+    bs.add_argument("--peer-steps", type=_bounded_int(1, 100000), default=20, help="control steps timed per dm_control env")
+    bs.add_argument("--physics", type=_choices("mjx", "native"), default=["mjx", "native"],
+                    help="comma-separated physics engines to measure")
+    bs.add_argument("--threads", type=_positive_int, default=0, metavar="N",
+                    help="threads of native physics (default: every core)")
     bs.add_argument("--json", action="store_true", help="print a JSON list, one object per measurement")
     bs.add_argument("--quiet", action="store_true", help="no progress messages")
     bs.set_defaults(fn=cmd_bench_soccer)
     bp = bsub.add_parser("plan", help="planning time and path length per difficulty over generated worlds")
-    bp.add_argument("--difficulties", type=_ints(0), default=[0, 1, 2], help="comma-separated levels")
-    bp.add_argument("--worlds", type=int, default=20, help="worlds per difficulty (seeds first-seed onward)")
-    bp.add_argument("--first-seed", type=int, default=0)
+    bp.add_argument("--difficulties", type=_ints(0, 20), default=[0, 1, 2], help="comma-separated levels")
+    bp.add_argument("--worlds", type=_bounded_int(1, 10000), default=20, help="worlds per difficulty (seeds first-seed onward)")
+    bp.add_argument("--first-seed", type=_bounded_int(0, 2**31 - 1), default=0)
     _add_planner_options(bp)
     bp.add_argument("--json", action="store_true", help="print a JSON list, one object per difficulty")
     bp.add_argument("--quiet", action="store_true", help="no progress bars")
     bp.set_defaults(fn=cmd_bench_plan)
 
     pl = sub.add_parser("plan", help="plan body-pose waypoints through a generated world or an MJCF scene")
-    pl.add_argument("--seed", type=int, default=0, help="seed of the generated world")
-    pl.add_argument("--difficulty", type=int, default=0)
+    pl.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0, help="seed of the generated world")
+    pl.add_argument("--difficulty", type=_bounded_int(0, 20), default=0)
     pl.add_argument("--scene", default=None, help="plan through this MJCF scene instead (needs --start, --goal)")
     pl.add_argument("--start", type=_xyz, default=None, help="body centre X,Y,Z (default: the world's start)")
     pl.add_argument("--goal", type=_xyz, default=None, help="body centre X,Y,Z (default: the world's goal)")
-    pl.add_argument("--resolution", type=float, default=0.05, help="map resolution when sampling --scene, m")
+    pl.add_argument("--resolution", type=_bounded_float(0.005, 1.0), default=0.05, help="map resolution when sampling --scene, m")
     _add_planner_options(pl)
     pl.add_argument("--json", action="store_true",
                     help="print one JSON object: waypoints [x, y, z, roll, pitch, yaw], length_m, plan_time_s, planner")
@@ -327,9 +471,10 @@ def build_parser() -> argparse.ArgumentParser:
     tr = sub.add_parser("train", help="train a policy (Brax PPO or rsl-rl PPO) into a run directory")
     tr.add_argument("task", nargs="?", help="task name (legged tasks)")
     tr.add_argument("--backend", choices=["rsl", "brax"], default="rsl")
-    tr.add_argument("--num-envs", type=int, default=256)
-    tr.add_argument("--timesteps", type=int, default=1_000_000, help="environment steps, all envs together")
-    tr.add_argument("--seed", type=int, default=0)
+    tr.add_argument("--num-envs", type=_bounded_int(1, 2**20), default=256)
+    tr.add_argument("--timesteps", type=_bounded_int(1, 10**12), default=1_000_000, help="environment steps, all envs together")
+    tr.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0)
+    _add_physics_options(tr)
     tr.add_argument("--run-dir", default=None, help="where the run is written (default runs/<task>-<time>)")
     tr.add_argument("--set", action="append", default=[], metavar="PATH=VALUE",
                     help="override any config field, e.g. ppo.learning_rate=3e-4, env.episode_seconds=10, "
@@ -341,12 +486,29 @@ def build_parser() -> argparse.ArgumentParser:
     ev = sub.add_parser("eval", help="evaluate a run's policy on held-out worlds (MJX or native MuJoCo)")
     ev.add_argument("run_dir")
     ev.add_argument("--checkpoint", default=None, help="a checkpoint file (default: the run's newest)")
-    ev.add_argument("--episodes", type=int, default=32)
-    ev.add_argument("--seed", type=int, default=12345, help="seed of the evaluation episodes")
-    ev.add_argument("--native", action="store_true", help="native MuJoCo physics (sim-to-sim) instead of MJX")
+    ev.add_argument("--episodes", type=_bounded_int(1, 100000), default=32)
+    ev.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=12345, help="seed of the evaluation episodes")
+    _add_physics_options(ev)
+    ev.add_argument("--num-envs", type=_bounded_int(1, 4096), default=16, help="episodes run side by side")
     ev.add_argument("--json", action="store_true", help="one-line JSON")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
     ev.set_defaults(fn=cmd_eval)
+
+    cv = sub.add_parser("convert-checkpoints", help="rewrite a run's old pickled checkpoints as data-only files")
+    cv.add_argument("run_dir")
+    cv.add_argument("--trust-pickles", action="store_true",
+                    help="you trust this run: its pickles may be loaded once to convert them (pickles can run code)")
+    cv.add_argument("--json", action="store_true")
+    cv.set_defaults(fn=cmd_convert)
+
+    pt = sub.add_parser("plot", help="plot a metric of a run's metrics.jsonl into a PNG")
+    pt.add_argument("run_dir")
+    pt.add_argument("--y", default="episode_return", help="metric to plot (a numeric field of metrics.jsonl)")
+    pt.add_argument("--x", default="step", choices=["step", "wall_s", "iteration"], help="horizontal axis")
+    pt.add_argument("--hline", type=float, default=None, help="draw a dashed horizontal line (a goal) here")
+    pt.add_argument("--out", default=None, help="PNG file (default RUN_DIR/<metric>.png)")
+    pt.add_argument("--json", action="store_true")
+    pt.set_defaults(fn=cmd_plot)
 
     ex = sub.add_parser("export", help="export a run's policy (ONNX) and check it against the framework")
     ex.add_argument("run_dir")
@@ -357,19 +519,22 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser("camera", help="each soccer player's head camera: the JAX ray renderer beside MuJoCo's")
     c.add_argument("--task", default="soccer-1v1-vision", help="soccer-1v1, soccer-2v2 or soccer-1v1-vision")
-    c.add_argument("--seed", type=int, default=0, help="game state: 0 is the kick-off, others move robots and ball")
+    c.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0, help="game state: 0 is the kick-off, others move robots and ball")
     c.add_argument("--out", default="camera", help="folder for agent<i>_ray.png and agent<i>_native.png")
     c.add_argument("--json", action="store_true", help="print the agreement figures as JSON")
     c.set_defaults(fn=cmd_camera)
 
-    t = sub.add_parser("tasks", help="list the registered tasks")
+    t = sub.add_parser("tasks", help="list the registered tasks: kind, robot, physics engines, trainers")
+    t.add_argument("--json", action="store_true", help="one JSON list")
     t.set_defaults(fn=cmd_tasks)
 
     d = sub.add_parser("demo", help="generate a world and run Go1 in it (MJX and native MuJoCo)")
     d.add_argument("--out", default="legged-demo", help="where to write the world files")
-    d.add_argument("--seconds", type=float, default=4.0, help="simulated seconds")
-    d.add_argument("--seed", type=int, default=0)
-    d.add_argument("--difficulty", type=int, default=1)
+    d.add_argument("--seconds", type=_bounded_float(0.0, 3600.0), default=4.0, help="simulated seconds")
+    d.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0)
+    d.add_argument("--difficulty", type=_bounded_int(0, 20), default=1)
+    d.add_argument("--physics", type=_choices("mjx", "native"), default=["mjx", "native"],
+                   help="comma-separated physics engines to step side by side (default both, with their qpos gap)")
     d.add_argument("--view", action="store_true", help="afterwards, serve the dashboard on the demo's world")
     _add_server_options(d)
     d.set_defaults(fn=cmd_demo)
@@ -380,9 +545,11 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--task", default=None, help="task to show (default: the run's, else confined-waypoints)")
     v.add_argument("--checkpoint", default=None, help="checkpoint file (default: the run's newest)")
     v.add_argument("--trajectory", default=None, metavar="FILE.npz", help="play a recorded trajectory instead")
-    v.add_argument("--num-envs", type=int, default=1, help="environments side by side (1-16)")
-    v.add_argument("--seed", type=int, default=0, help="seed of the first rollout")
-    v.add_argument("--steps", type=int, default=500, help="control steps per rollout (50 per second)")
+    v.add_argument("--num-envs", type=_bounded_int(1, 16), default=1, help="environments side by side (1-16)")
+    v.add_argument("--physics", choices=["mjx", "native"], default="mjx",
+                   help="physics of the rollouts: mjx, or native (MuJoCo's C engine; no MJX compilation of physics)")
+    v.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0, help="seed of the first rollout")
+    v.add_argument("--steps", type=_bounded_int(1, 100000), default=500, help="control steps per rollout (50 per second)")
     v.add_argument("--save", default=None, metavar="FILE.npz",
                    help="record one rollout into FILE.npz and exit instead of serving")
     _add_server_options(v)
@@ -403,14 +570,17 @@ def _join_negative_coordinates(argv: list[str]) -> list[str]:
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    args = build_parser().parse_args(_join_negative_coordinates(argv))
-    from legged.envs.registry import UnknownTaskError
+    try:
+        args = build_parser().parse_args(_join_negative_coordinates(argv))
+    except SystemExit as exc:  # a usage error (already printed on one line) or --help: a return code
+        return exc.code if isinstance(exc.code, int) else 2
+    from legged.tasks import UnknownTaskError
     from legged.worlds import WorldError
 
     try:
         return args.fn(args)
     except (UnknownTaskError, WorldError, OSError, ValueError) as exc:
-        print(f"legged {args.command}: error: {exc}", file=sys.stderr)
+        print(f"legged {args.command}: error: {' '.join(str(exc).split())}", file=sys.stderr)  # one line
         return 2
 
 

@@ -3,7 +3,7 @@
 from planners.batch import cache_key, default_cache_dir, feasible_worlds, plan_world, plan_worlds
 from planners.body_check import BodyCheckConfig, BodyChecker
 from planners.body_planner import PLANNERS, Plan, PlannerConfig, PlanningError, plan_path, replan
-from planners.maps import HeightMaps
+from legged.worlds.maps import HeightMaps
 from planners.planned_env import make_planned_env
 from planners.scene_maps import maps_from_scene, reference_between
 

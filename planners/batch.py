@@ -22,7 +22,7 @@ from legged.robots import GO1
 from legged.robots.spec import RobotSpec
 from legged.worlds.generator import World, generate_world
 from planners.body_planner import Plan, PlannerConfig, PlanningError, plan_path
-from planners.maps import HeightMaps
+from legged.worlds.maps import HeightMaps
 
 CACHE_VERSION = 1
 """Bump when the planner's output for the same inputs changes, so stale cache entries are not used."""

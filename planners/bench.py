@@ -8,7 +8,7 @@ from tqdm import tqdm
 from legged.robots import GO1
 from legged.worlds.generator import generate_world
 from planners.body_planner import PlannerConfig, PlanningError, plan_path
-from planners.maps import HeightMaps
+from legged.worlds.maps import HeightMaps
 
 
 def bench_planner(difficulties, num_worlds: int, config: PlannerConfig = PlannerConfig(), first_seed: int = 0,

@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 
 from legged.robots.spec import RobotSpec
-from planners.maps import HeightMaps
+from legged.worlds.maps import HeightMaps
 
 VALID, OFF_MAP, OUT_OF_REACH, HITS_CEILING, HITS_FLOOR = range(5)
 REASONS = {OFF_MAP: "the body leaves the map", OUT_OF_REACH: "the legs cannot hold the body there",

@@ -24,7 +24,7 @@ from ompl import util as ou
 from legged.robots import GO1
 from legged.robots.spec import RobotSpec
 from planners.body_check import BodyCheckConfig, BodyChecker
-from planners.maps import HeightMaps
+from legged.worlds.maps import HeightMaps
 
 ou.setLogLevel(ou.LOG_ERROR)
 

@@ -10,9 +10,8 @@ import dataclasses
 
 import numpy as np
 
-from legged.envs import default_config, make
-from legged.envs.confined import ConfinedConfig, ConfinedEnv
-from legged.robots import GO1
+from legged.envs.confined import ConfinedEnv
+from legged.tasks import make, task_entry
 from legged.worlds.terrain import Terrain
 from planners.batch import feasible_worlds
 from planners.body_planner import PlannerConfig
@@ -31,12 +30,13 @@ def tile_paths(terrain: Terrain, worlds, plans) -> list[np.ndarray]:
 def make_planned_env(task: str, planner: PlannerConfig = PlannerConfig(), cache_dir=None, workers: int = 1,
                      progress: bool = True, config=None, **overrides):
     """Build `task`; confined tasks get traversable worlds and planned waypoints, others are built as is."""
-    config = config or default_config(task)
+    entry = task_entry(task)
+    config = config or entry.config
     if overrides:
         config = dataclasses.replace(config, **overrides)
-    if not isinstance(config, ConfinedConfig):
+    if entry.kind != "confined":
         return make(task, config)
-    worlds, plans = feasible_worlds(config.num_worlds, config.world_seed, config.difficulties, config.world, GO1,
-                                    planner, cache_dir, workers, progress=progress)
+    worlds, plans = feasible_worlds(config.num_worlds, config.world_seed, config.difficulties, config.world,
+                                    entry.robot, planner, cache_dir, workers, progress=progress)
     terrain = Terrain.from_worlds(worlds)
-    return ConfinedEnv(config, GO1, terrain, tile_paths(terrain, worlds, plans))
+    return ConfinedEnv(config, entry.robot, terrain, tile_paths(terrain, worlds, plans))

@@ -18,7 +18,7 @@ from typing import Callable
 import mujoco
 import numpy as np
 
-from planners.maps import HeightMaps
+from legged.worlds.maps import HeightMaps
 
 VOID_DEPTH = 1.0
 """A column with no floor below the reference height gets a floor this far below it (a void)."""

@@ -17,9 +17,11 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import io
+import json
 import math
-import pickle
 import time
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
@@ -32,7 +34,7 @@ from tqdm import tqdm
 
 from legged.envs.vector import select_envs
 from policies.config import ConfigError, TrainConfig
-from policies.run_dir import RunDir, RunDirError, check_compatible
+from policies.run_dir import RunDir, RunDirError, TrainingDiverged, check_compatible
 
 
 def check_devices(config: TrainConfig) -> None:
@@ -113,16 +115,64 @@ def network_factory(config: TrainConfig):
         value_obs_key="privileged_state")
 
 
+CHECKPOINT_SUFFIX = "npz"
+"""Brax checkpoints are .npz files of arrays (numpy.load with allow_pickle=False never runs code)."""
+
+
+def encode_checkpoint(meta: dict, params, optimizer_state=None) -> bytes:
+    """A data-only checkpoint: the leaves of `params` ((normalizer, policy, value)) and of the optimiser
+    state as arrays, `meta` (step, obs_sizes, num_actions, ...) as JSON text. The tree structures are not
+    stored: loaders rebuild them from the run's config (`params_template`) or from Brax's fresh state."""
+    arrays = {f"params_{i:05d}": np.asarray(x) for i, x in enumerate(jax.tree_util.tree_leaves(params))}
+    if optimizer_state is not None:
+        arrays.update({f"optimizer_{i:05d}": np.asarray(x)
+                       for i, x in enumerate(jax.tree_util.tree_leaves(optimizer_state))})
+    arrays["meta"] = np.array(json.dumps({"backend": "brax", **meta}))
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    return buffer.getvalue()
+
+
 def load_checkpoint(path) -> dict:
-    """A Brax checkpoint of this project; RunDirError naming the file if damaged."""
+    """A Brax checkpoint of this project as data: its meta entries plus `params_leaves` and
+    `optimizer_leaves` (lists of arrays); RunDirError naming the file if it is damaged or foreign."""
+    path = Path(path)
+    if path.suffix == ".pkl":
+        raise RunDirError(f"{path} is a pickled checkpoint of an earlier version of legged; pickles can run code "
+                          "when loaded, so legged no longer reads them. If you trust the file, convert its run "
+                          f"once with: legged convert-checkpoints {path.parent.parent} --trust-pickles")
     try:
-        with open(path, "rb") as f:
-            payload = pickle.load(f)
+        with np.load(path, allow_pickle=False) as z:
+            meta = json.loads(str(z["meta"]))
+            leaves = lambda prefix: [z[k] for k in sorted(n for n in z.files if n.startswith(prefix))]
+            payload = dict(meta, params_leaves=leaves("params_"), optimizer_leaves=leaves("optimizer_") or None)
     except Exception as exc:
         raise RunDirError(f"checkpoint {path} cannot be read: {exc}") from None
-    if not isinstance(payload, dict) or payload.get("backend") != "brax":
+    if payload.get("backend") != "brax":
         raise RunDirError(f"{path} is not a Brax checkpoint of this project")
+    payload["obs_sizes"] = {k: v if isinstance(v, int) else tuple(v) for k, v in payload["obs_sizes"].items()}
     return payload
+
+
+def params_template(config: TrainConfig, obs_sizes: dict, num_actions: int):
+    """(normalizer, policy, value) parameters of freshly built networks: the structure checkpoints fill."""
+    from brax.training.acme import running_statistics, specs
+
+    networks = network_factory(config)(obs_sizes, num_actions, preprocess_observations_fn=running_statistics.normalize)
+    key_policy, key_value = jax.random.split(jax.random.PRNGKey(0))
+    shapes = {k: specs.Array((v,), jnp.dtype("float32")) for k, v in obs_sizes.items()}
+    return (running_statistics.init_state(shapes), networks.policy_network.init(key_policy),
+            networks.value_network.init(key_value))
+
+
+def fill(template, leaves: list, what: str, path):
+    """`template`'s tree with `leaves` (checked one by one); RunDirError naming `what` if they do not fit."""
+    expected = jax.tree_util.tree_leaves(template)
+    if len(expected) != len(leaves) or any(np.shape(a) != np.shape(b) for a, b in zip(expected, leaves)):
+        raise RunDirError(f"{path}: the saved {what} ({len(leaves)} arrays) do not fit this run's networks "
+                          f"({len(expected)} arrays); was it written with other layer sizes?")
+    return jax.tree_util.tree_unflatten(jax.tree_util.tree_structure(template),
+                                        [np.asarray(b, np.asarray(a).dtype) for a, b in zip(expected, leaves)])
 
 
 class OptimizerStateTap:
@@ -130,7 +180,7 @@ class OptimizerStateTap:
 
     def __init__(self, restore=None):
         self.restore = restore
-        """Optimiser state (host arrays) to start from, or None for Brax's fresh one."""
+        """Leaves of the optimiser state to start from (host arrays), or None for Brax's fresh one."""
         self.latest = None
         """Optimiser state after the last training epoch (host arrays, first device's copy)."""
 
@@ -139,13 +189,10 @@ class OptimizerStateTap:
             return tree
         state = tree[0]
         if len(tree) == 2 and self.restore is not None:  # the first epoch's input: put the saved state in
-            fresh = jax.tree_util.tree_structure(state.optimizer_state)
-            saved = jax.tree_util.tree_structure(self.restore)
-            if fresh != saved:
-                raise RunDirError(f"the checkpoint's optimiser state does not fit this run's optimiser "
-                                  f"({saved} vs {fresh})")
+            fresh = jax.tree_util.tree_map(lambda x: x[0], state.optimizer_state)
+            saved = fill(fresh, self.restore, "optimiser state", "the checkpoint")
             devices = jax.local_devices()[:jax.tree_util.tree_leaves(state.params)[0].shape[0]]
-            tree = (state.replace(optimizer_state=jax.device_put_replicated(self.restore, devices)),) + tree[1:]
+            tree = (state.replace(optimizer_state=jax.device_put_replicated(saved, devices)),) + tree[1:]
             self.restore = None
         elif len(tree) == 3:  # an epoch's output
             self.latest = jax.device_get(jax.tree_util.tree_map(lambda x: x[0], state.optimizer_state))
@@ -171,8 +218,9 @@ def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, prog
         path = run.latest_checkpoint()
         payload = load_checkpoint(path)
         check_compatible(payload["obs_sizes"], payload["num_actions"], env, path)
-        start_step, restore = payload["step"], payload["params"]
-        tap.restore = payload.get("optimizer_state")
+        start_step = payload["step"]
+        restore = fill(params_template(config, obs_sizes, env.action_size), payload["params_leaves"], "parameters", path)
+        tap.restore = payload["optimizer_leaves"]
         if start_step >= config.timesteps:
             records = run.metrics()
             return records[-1] if records else {}
@@ -210,10 +258,16 @@ def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, prog
     def on_params(step, make_policy, params):
         if step == 0:
             return
-        payload = {"backend": "brax", "step": start_step + int(step), "params": jax.device_get(params),
-                   "optimizer_state": tap.latest, "obs_sizes": obs_sizes, "num_actions": env.action_size,
-                   "config": config.task}
-        run.write_checkpoint(start_step + int(step), "pkl", pickle.dumps(payload))
+        host = jax.device_get(params)
+        if not all(np.all(np.isfinite(x)) for x in jax.tree_util.tree_leaves(host)):
+            last = run.checkpoints()
+            raise TrainingDiverged(f"training diverged before step {start_step + int(step)} (network parameters not "
+                                   "finite); nothing was saved after it. "
+                                   + (f"The last good checkpoint is {last[-1]}: resume with `legged train --resume "
+                                      f"{run.path}`" if last else "No checkpoint was written yet."))
+        meta = {"step": start_step + int(step), "obs_sizes": obs_sizes, "num_actions": env.action_size,
+                "task": config.task}
+        run.write_checkpoint(start_step + int(step), CHECKPOINT_SUFFIX, encode_checkpoint(meta, host, tap.latest))
 
     try:
         with tap.attached():

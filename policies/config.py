@@ -9,7 +9,7 @@ from typing import Any, Literal
 
 import yaml
 
-from legged.envs import default_config
+from legged.tasks import default_config, task_entry
 
 
 class ConfigError(ValueError):
@@ -40,6 +40,8 @@ class PPOConfig:
     """Value-loss weight."""
     desired_kl: float = 0.01
     """Target KL of the adaptive learning-rate schedule."""
+    schedule: Literal["adaptive", "fixed"] = "adaptive"
+    """rsl backend: adapt the learning rate to `desired_kl` after every mini-batch, or keep it fixed."""
     max_grad_norm: float = 1.0
     """Gradient clipping norm."""
     actor_hidden: tuple[int, ...] = (512, 256, 128)
@@ -89,6 +91,10 @@ class TrainConfig:
     """Iterations between checkpoints (the last one is always written)."""
     device: str = "cpu"
     """PyTorch device of the rsl backend (cpu, cuda, cuda:1, ...)."""
+    physics: Literal["mjx", "native"] = "mjx"
+    """Physics engine: mjx (JAX; fastest on an accelerator) or native (MuJoCo's C engine; fastest on a CPU)."""
+    threads: int = 0
+    """CPU threads of native physics and of torch (0: every core this process may use)."""
     ppo: PPOConfig = PPOConfig()
     """PPO hyper-parameters."""
     env: Any = None
@@ -99,26 +105,38 @@ class TrainConfig:
     @property
     def self_play(self) -> bool:
         """Whether this run trains against snapshots of itself (soccer, rsl backend, state observations)."""
-        soccer, vision = _soccer_task(self.env)
-        if not soccer or self.selfplay.opponent == "scripted":
+        entry = task_entry(self.task)
+        if entry.kind != "soccer" or self.selfplay.opponent == "scripted":
             return False
-        return self.backend == "rsl" and not vision
+        return self.backend == "rsl" and not entry.vision
 
     def resolved(self) -> "TrainConfig":
         """This config with the task's default env config filled in and values checked."""
         cfg = self if self.env is not None else dataclasses.replace(self, env=default_config(self.task))
         if cfg.backend not in ("rsl", "brax"):
             raise ConfigError(f"backend must be 'rsl' or 'brax', got {cfg.backend!r}")
+        if cfg.physics not in ("mjx", "native"):
+            raise ConfigError(f"physics must be 'mjx' or 'native', got {cfg.physics!r}")
+        entry = task_entry(cfg.task)
+        try:
+            entry.check(cfg.physics, cfg.backend)
+        except ValueError as exc:
+            raise ConfigError(str(exc)) from None
+        if cfg.backend == "brax" and cfg.physics == "native":
+            raise ConfigError("--backend brax needs --physics mjx (Brax PPO compiles the environment into its "
+                              "training step); train native physics with --backend rsl")
+        if cfg.threads < 0:
+            raise ConfigError(f"threads must be >= 1 (or 0 for every core), got {cfg.threads}")
         for name in ("num_envs", "timesteps", "checkpoint_every"):
             if getattr(cfg, name) < 1:
                 raise ConfigError(f"{name} must be >= 1, got {getattr(cfg, name)}")
-        soccer, vision = _soccer_task(cfg.env)
-        if vision and cfg.backend == "brax":
-            raise ConfigError(f"{cfg.task} needs --backend rsl: its actor reads camera images with a CNN, and the "
-                              "Brax backend builds MLPs only")
-        if soccer and cfg.selfplay.opponent == "self-play" and (cfg.backend == "brax" or vision):
+        if entry.kind == "soccer" and cfg.selfplay.opponent == "self-play" and (cfg.backend == "brax" or entry.vision):
             raise ConfigError("selfplay.opponent=self-play needs the rsl backend and a state task (snapshots of the "
                               "learner are MLPs on the state features); use selfplay.opponent=scripted")
+        _check_ppo(cfg.ppo)
+        if cfg.num_envs > 2**20 or cfg.timesteps > 10**12:
+            raise ConfigError(f"num_envs ({cfg.num_envs}) must be at most {2**20:,} and timesteps ({cfg.timesteps}) "
+                              f"at most {10**12:,}")
         sp = cfg.selfplay
         if sp.snapshot_every < 1 or sp.pool_size < 1 or not 0.0 <= sp.scripted_fraction <= 1.0:
             raise ConfigError("selfplay: snapshot_every and pool_size must be >= 1, scripted_fraction in [0, 1]")
@@ -128,11 +146,30 @@ class TrainConfig:
         return cfg
 
 
-def _soccer_task(env_config) -> tuple[bool, bool]:
-    """(is a soccer task, sees camera images) for a task's env config."""
-    from legged.soccer.task_config import SoccerConfig
-
-    return isinstance(env_config, SoccerConfig), bool(getattr(env_config, "vision", False))
+def _check_ppo(ppo: PPOConfig) -> None:
+    """ConfigError naming the first PPO setting outside its range."""
+    rules = [
+        ("learning_rate", 0.0 < ppo.learning_rate <= 1.0, "in (0, 1]"),
+        ("num_steps_per_env", 1 <= ppo.num_steps_per_env <= 100_000, "from 1 to 100,000"),
+        ("num_learning_epochs", 1 <= ppo.num_learning_epochs <= 1000, "from 1 to 1,000"),
+        ("num_mini_batches", 1 <= ppo.num_mini_batches <= 100_000, "from 1 to 100,000"),
+        ("clip_param", 0.0 < ppo.clip_param <= 10.0, "in (0, 10]"),
+        ("gamma", 0.0 < ppo.gamma <= 1.0, "in (0, 1]"),
+        ("lam", 0.0 <= ppo.lam <= 1.0, "in [0, 1]"),
+        ("entropy_coef", 0.0 <= ppo.entropy_coef <= 100.0, "in [0, 100]"),
+        ("value_loss_coef", 0.0 < ppo.value_loss_coef <= 1000.0, "in (0, 1000]"),
+        ("desired_kl", 0.0 < ppo.desired_kl <= 10.0, "in (0, 10]"),
+        ("max_grad_norm", 0.0 < ppo.max_grad_norm <= 1e6, "in (0, 1e6]"),
+        ("init_noise_std", 0.0 < ppo.init_noise_std <= 100.0, "in (0, 100]"),
+        ("obs_std_floor", 0.0 < ppo.obs_std_floor <= 1e3, "in (0, 1000]"),
+        ("actor_hidden", len(ppo.actor_hidden) >= 1 and all(1 <= n <= 65536 for n in ppo.actor_hidden),
+         "one or more layer sizes from 1 to 65,536"),
+        ("critic_hidden", len(ppo.critic_hidden) >= 1 and all(1 <= n <= 65536 for n in ppo.critic_hidden),
+         "one or more layer sizes from 1 to 65,536"),
+    ]
+    for name, ok, allowed in rules:
+        if not ok:
+            raise ConfigError(f"ppo.{name} must be {allowed}, got {getattr(ppo, name)!r}")
 
 
 def to_dict(obj) -> dict:

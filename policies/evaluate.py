@@ -8,8 +8,7 @@ import jax
 import numpy as np
 from tqdm import tqdm
 
-from legged.envs.confined import ConfinedConfig
-from legged.envs.native import NativeRunner
+from legged.tasks import task_entry
 from legged.envs.vector import VectorEnv
 from policies.policy_io import actor_observation
 
@@ -17,9 +16,9 @@ HELD_OUT_SEED_OFFSET = 1_000_003
 """Evaluation worlds use world_seed + this: never the worlds the policy trained on."""
 
 
-def held_out(env_config):
+def held_out(task: str, env_config):
     """The env config with held-out worlds (confined tasks) and no time-limit change."""
-    if isinstance(env_config, ConfinedConfig):
+    if task_entry(task).kind == "confined":
         return dataclasses.replace(env_config, world_seed=env_config.world_seed + HELD_OUT_SEED_OFFSET)
     return env_config
 
@@ -30,12 +29,15 @@ def summarize(finals: list[dict], confined: bool) -> dict:
            "episode_length_steps": float(np.mean([f["length"] for f in finals]))}
     terms = sorted(k for k in finals[0] if k.startswith("reward/"))
     out["reward_terms"] = {k[7:]: float(np.mean([f[k] for f in finals])) for k in terms}
+    if "fell" in finals[0]:
+        out["fall_rate"] = float(np.mean([f["fell"] > 0 for f in finals]))
+    if "tracking_error_mps" in finals[0]:  # velocity tracking: mean |commanded - actual| planar base velocity
+        out["tracking_error_mps"] = float(np.mean([f["tracking_error_mps"] for f in finals]))
     if "goals_for" in finals[0]:  # soccer, from the learner's side against the evaluation opponent
         goals_for = np.array([f["goals_for"] for f in finals])
         goals_against = np.array([f["goals_against"] for f in finals])
         out.update(goals_for_per_episode=float(goals_for.mean()), goals_against_per_episode=float(goals_against.mean()),
-                   win_rate=float((goals_for > goals_against).mean()),
-                   fall_rate=float(np.mean([f["fell"] > 0 for f in finals])))
+                   win_rate=float((goals_for > goals_against).mean()))
     if confined:
         success = np.array([f["success"] > 0 for f in finals])
         out["success_rate"] = float(success.mean())
@@ -46,41 +48,31 @@ def summarize(finals: list[dict], confined: bool) -> dict:
     return out
 
 
-def evaluate_mjx(env, policy, episodes: int, seed: int, num_envs: int = 16, progress: bool = True) -> list[dict]:
-    """Run the policy in `num_envs` MJX environments until `episodes` episodes have finished."""
-    vector = VectorEnv.of(env, min(num_envs, episodes))
-    batch = vector.reset(jax.random.PRNGKey(seed))
-    obs, finals = batch.state.obs, []
-    bar = tqdm(total=episodes, desc="eval (MJX)", unit="episode", disable=not progress)
-    while len(finals) < episodes:
-        batch, result = vector.step(batch, policy.act(actor_observation(obs)))
-        obs = result.obs
-        done = np.asarray(result.done)
-        for i in np.flatnonzero(done)[: episodes - len(finals)]:
-            finals.append({k: float(np.asarray(v)[i]) for k, v in result.finished.items()})
-            bar.update()
+def evaluate(env, policy, episodes: int, seed: int, physics: str = "mjx", num_envs: int = 16,
+             threads: int | None = None, progress: bool = True) -> list[dict]:
+    """Run the deterministic policy for exactly `episodes` episodes, each to its end: `num_envs` environments
+    at a time, each contributing its first episode only (counting the first episodes to finish would favour
+    short ones, i.e. falls). The episodes' reset keys depend on `seed` and `num_envs` only, not on the physics
+    engine: both engines start the same episodes."""
+    num_envs = min(num_envs, episodes)
+    vector = VectorEnv.of(env, num_envs, physics, threads)
+    finals: list[dict] = []
+    bar = tqdm(total=episodes, desc=f"eval ({physics})", unit="episode", disable=not progress)
+    for first in range(0, episodes, num_envs):
+        batch = vector.reset(jax.random.fold_in(jax.random.PRNGKey(seed), first))
+        obs, pending = batch.state.obs, np.ones(num_envs, bool)
+        pending[episodes - first:] = False  # the last round may need fewer environments
+        chunk: dict[int, dict] = {}
+        while pending.any():
+            batch, result = vector.step(batch, jax.numpy.asarray(policy.act(actor_observation(obs))))
+            obs = result.obs
+            ended = np.asarray(result.done) & pending
+            if ended.any():
+                stats = {k: np.asarray(v) for k, v in result.finished.items()}
+                for i in np.flatnonzero(ended):
+                    chunk[i] = {k: float(v[i]) for k, v in stats.items()}
+                pending &= ~ended
+                bar.update(int(ended.sum()))
+        finals.extend(chunk[i] for i in sorted(chunk))
     bar.close()
-    return finals
-
-
-def evaluate_native(env, policy, episodes: int, seed: int, progress: bool = True) -> list[dict]:
-    """Run the policy with native MuJoCo physics (sim-to-sim), one episode after another."""
-    if not hasattr(env, "transition") or hasattr(env, "game"):
-        raise ValueError("--native is not available for the soccer tasks: evaluate them in MJX, or step the game "
-                         "natively with legged.soccer.parallel_env.SoccerParallelEnv (PettingZoo)")
-    runner, finals = NativeRunner(env), []
-    keys = jax.random.split(jax.random.PRNGKey(seed), episodes)
-    for k in tqdm(range(episodes), desc="eval (native MuJoCo)", unit="episode", disable=not progress):
-        state = runner.reset(keys[k])
-        sums = {"return": 0.0, "length": 0.0}
-        while True:
-            state = runner.step(policy.act(np.asarray(state.obs["state"])[None])[0])
-            sums["return"] += float(state.reward)
-            sums["length"] += 1.0
-            for name, value in state.metrics.items():
-                if name.startswith("reward/"):
-                    sums[name] = sums.get(name, 0.0) + float(value)
-            if float(state.done) > 0:
-                break
-        finals.append({**sums, **{n: float(v) for n, v in state.metrics.items() if not n.startswith("reward/")}})
     return finals

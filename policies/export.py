@@ -47,7 +47,8 @@ def actor_module(policy: Policy) -> torch.nn.Module:
 
 
 def export_onnx(policy: Policy, path: str | Path, samples: int = 64, seed: int = 0) -> dict:
-    """Write the ONNX model and compare it with the policy on random observations; returns the check."""
+    """Write the ONNX model and compare it with the policy on random observations; returns the check. The
+    model is written to a temporary file and checked there: `path` is replaced only by a model that passed."""
     import onnxruntime
 
     path = Path(path)
@@ -60,17 +61,20 @@ def export_onnx(policy: Policy, path: str | Path, samples: int = 64, seed: int =
     torch.onnx.export(module, dummy, str(tmp), input_names=names, output_names=["actions"],
                       dynamic_axes={**{n: {0: "batch"} for n in names}, "actions": {0: "batch"}},
                       opset_version=18, dynamo=False)
-    tmp.replace(path)
     rng = np.random.default_rng(seed)
     obs = rng.normal(size=(samples, policy.obs_size)).astype(np.float32)
     feeds = {"obs": obs}
     if camera:
         feeds["camera"] = rng.random((samples, *camera), dtype=np.float32)
-    session = onnxruntime.InferenceSession(str(path), providers=["CPUExecutionProvider"])
-    onnx_actions = session.run(["actions"], feeds)[0]
-    gap = float(np.abs(onnx_actions - policy.act({"state": obs, "camera": feeds["camera"]} if camera else obs)).max())
-    if not gap <= PARITY_ATOL:
-        raise RuntimeError(f"ONNX export of {policy.checkpoint} differs from the policy by {gap:.2e} "
-                           f"(allowed {PARITY_ATOL:.0e})")
+    try:
+        session = onnxruntime.InferenceSession(str(tmp), providers=["CPUExecutionProvider"])
+        onnx_actions = session.run(["actions"], feeds)[0]
+        gap = float(np.abs(onnx_actions - policy.act({"state": obs, "camera": feeds["camera"]} if camera else obs)).max())
+        if not gap <= PARITY_ATOL:
+            raise ValueError(f"ONNX export of {policy.checkpoint} differs from the policy by {gap:.2e} "
+                             f"(allowed {PARITY_ATOL:.0e}); {path} was left as it was")
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
     return {"onnx": str(path), "checkpoint": str(policy.checkpoint), "backend": policy.backend,
             "obs_size": policy.obs_size, "num_actions": policy.num_actions, "max_abs_diff": gap, "samples": samples}

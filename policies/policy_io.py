@@ -51,7 +51,7 @@ def _rsl_policy(config: TrainConfig, path: Path) -> Policy:
     module = alg.get_policy().as_onnx(verbose=False).eval()
 
     def act(obs) -> np.ndarray:
-        tensor = lambda x: torch.as_tensor(np.asarray(x, np.float32))
+        tensor = lambda x: torch.from_numpy(np.array(x, np.float32))  # a writable copy of the JAX buffer
         with torch.inference_mode():
             if isinstance(obs, dict):  # a camera task: the state vector, then the images (CNN actor)
                 return module(tensor(obs["state"]), tensor(obs["camera"])).numpy()
@@ -65,13 +65,13 @@ def _brax_policy(config: TrainConfig, path: Path) -> Policy:
     from brax.training.acme import running_statistics
     from brax.training.agents.ppo import networks as ppo_networks
 
-    from policies.brax_backend import load_checkpoint, network_factory
+    from policies.brax_backend import fill, load_checkpoint, network_factory, params_template
 
     payload = load_checkpoint(path)
     sizes = payload["obs_sizes"]
     networks = network_factory(config)(sizes, payload["num_actions"],
                                        preprocess_observations_fn=running_statistics.normalize)
-    params = payload["params"]
+    params = fill(params_template(config, sizes, payload["num_actions"]), payload["params_leaves"], "parameters", path)
     inference = jax.jit(ppo_networks.make_inference_fn(networks)((params[0], params[1]), deterministic=True))
     key = jax.random.PRNGKey(0)
 

@@ -5,20 +5,25 @@ from __future__ import annotations
 import contextlib
 import io
 import math
+import pickle
 import time
+import warnings
+import zipfile
 from pathlib import Path
 
 import jax
+import numpy as np
 import torch
 from rsl_rl.algorithms import PPO
 from tensordict import TensorDict
 from tqdm import tqdm
 
+from legged.envs.native import default_threads
 from legged.envs.vector import VectorEnv
 from policies.config import PPOConfig, TrainConfig
 from policies.distributed import Launch, init_torch_processes
 from policies.rsl_vecenv import RslVecEnv, obs_groups
-from policies.run_dir import RunDir, RunDirError, check_compatible
+from policies.run_dir import RunDir, RunDirError, TrainingDiverged, check_compatible
 
 
 CAMERA_CNN = {"output_channels": [16, 32, 32], "kernel_size": [5, 3, 3], "stride": [2, 2, 1], "padding": "zeros",
@@ -42,7 +47,7 @@ def rsl_config(ppo: PPOConfig, multi_gpu: dict | None = None, camera: bool = Fal
                       ppo.num_learning_epochs, "num_mini_batches": ppo.num_mini_batches, "clip_param":
                       ppo.clip_param, "gamma": ppo.gamma, "lam": ppo.lam, "entropy_coef": ppo.entropy_coef,
                       "value_loss_coef": ppo.value_loss_coef, "desired_kl": ppo.desired_kl,
-                      "max_grad_norm": ppo.max_grad_norm, "schedule": "adaptive"},
+                      "max_grad_norm": ppo.max_grad_norm, "schedule": ppo.schedule},
         "actor": model(ppo.actor_hidden, True),
         "critic": model(ppo.critic_hidden, False),
         "obs_groups": obs_groups(camera),
@@ -73,14 +78,54 @@ def build_ppo(obs: TensorDict, num_envs: int, num_actions: int, ppo: PPOConfig, 
 
 
 def load_checkpoint(path: Path) -> dict:
-    """A checkpoint written by `train_rsl`; RunDirError naming the file if it is damaged or foreign."""
+    """A checkpoint written by `train_rsl`, read as data only (tensors, numbers, strings, lists and dicts:
+    `torch.load(weights_only=True)`, which never runs code from the file); RunDirError naming the file if it
+    is damaged, foreign, or holds anything else."""
+    if not zipfile.is_zipfile(path):
+        raise RunDirError(f"checkpoint {path} cannot be read: not a torch checkpoint (torch.save writes zip files)")
     try:
-        payload = torch.load(path, map_location="cpu", weights_only=False)
+        with warnings.catch_warnings():  # torch warns about pickle protocols before it refuses them
+            warnings.simplefilter("ignore")
+            payload = torch.load(path, map_location="cpu", weights_only=True)
+    except pickle.UnpicklingError as exc:
+        lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+        cause = next((line[line.index("Unsupported global"):].split(" was not")[0] for line in lines
+                      if "Unsupported global" in line), None)
+        if cause is None:  # not an object the safe loader refused: the file is damaged or not a checkpoint
+            reason = next((line for line in lines if "load key" in line or "truncated" in line), lines[-1] if lines else "")
+            raise RunDirError(f"checkpoint {path} cannot be read: {reason}") from None
+        raise RunDirError(f"checkpoint {path} holds Python objects beyond tensors and plain data, and is not "
+                          f"loaded (loading it could run code from it): {cause}. If you trust its run, convert it "
+                          f"once with: legged convert-checkpoints {path.parent.parent} --trust-pickles") from None
     except Exception as exc:
         raise RunDirError(f"checkpoint {path} cannot be read: {exc}") from None
     if not isinstance(payload, dict) or payload.get("backend") != "rsl":
         raise RunDirError(f"{path} is not an rsl-rl checkpoint of this project")
+    if "opponent_pool" in payload:
+        payload["opponent_pool"] = _as_numpy(payload["opponent_pool"])
     return payload
+
+
+def _as_tensors(obj):
+    """numpy arrays inside nested dicts, lists and tuples as torch tensors (data-only checkpoints)."""
+    if isinstance(obj, np.ndarray):
+        return torch.from_numpy(np.ascontiguousarray(obj))
+    if isinstance(obj, dict):
+        return {k: _as_tensors(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return type(obj)(_as_tensors(v) for v in obj)
+    return obj
+
+
+def _as_numpy(obj):
+    """The inverse of `_as_tensors`."""
+    if isinstance(obj, torch.Tensor):
+        return obj.numpy()
+    if isinstance(obj, dict):
+        return {k: _as_numpy(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return type(obj)(_as_numpy(v) for v in obj)
+    return obj
 
 
 def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progress: bool = True) -> dict:
@@ -103,7 +148,10 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         check_compatible(payload["obs_sizes"], payload["num_actions"], env, path)
         iteration, step = payload["iteration"], payload["step"]
     torch.manual_seed(config.seed + launch.rank)
-    vector = VectorEnv.of(env, local_envs)
+    threads = config.threads or default_threads()
+    if config.physics == "native":
+        torch.set_num_threads(threads)
+    vector = VectorEnv.of(env, local_envs, config.physics, threads)
     key = jax.random.fold_in(jax.random.fold_in(jax.random.PRNGKey(config.seed), iteration), launch.rank)
     venv = RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device)
     alg = build_ppo(venv.get_observations(), local_envs, env.action_size, ppo, device, launch)
@@ -129,6 +177,8 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                desc=f"{config.task} rsl", disable=not (progress and launch.is_main))
     obs = venv.get_observations()
     alg.train_mode()
+    earlier = run.metrics() if resume else []
+    wall0 = time.perf_counter() - ((earlier[-1].get("wall_s") or 0.0) if earlier else 0.0)  # resumed runs go on
     try:
         while iteration < iterations:
             t0 = time.perf_counter()
@@ -145,6 +195,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                     reward_sum += rewards.mean()
                 alg.compute_returns(obs)
             losses = alg.update()
+            diverged = non_finite(losses, alg)
             iteration += 1
             if pool is not None and iteration % config.selfplay.snapshot_every == 0:
                 from policies.selfplay import snapshot_rsl_actor
@@ -155,7 +206,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
             record = {"step": step, "iteration": iteration, "episode_return": None, "episode_length": None,
                       **venv.episode_stats.means(),
                       "reward_per_step": float(reward_sum) / ppo.num_steps_per_env,
-                      "steps_per_s": per_iteration / elapsed,
+                      "steps_per_s": per_iteration / elapsed, "wall_s": time.perf_counter() - wall0,
                       "learning_rate": alg.learning_rate,
                       "action_std": float(alg.get_policy().output_std.detach().mean()),
                       **{f"loss_{k}": float(v) for k, v in losses.items()}}
@@ -163,6 +214,15 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                 record.update(opponent=opponent, opponent_pool=len(pool.snapshots))
             bar.update(per_iteration)
             bar.set_postfix(ret=_short(record["episode_return"]), sps=f"{record['steps_per_s']:.0f}")
+            if diverged:
+                if launch.is_main:
+                    run.log(record, writer)
+                last = run.checkpoints()
+                raise TrainingDiverged(
+                    f"training diverged at iteration {iteration} ({diverged}); nothing was saved after it. "
+                    + (f"The last good checkpoint is {last[-1]}: resume with `legged train --resume {run.path}`"
+                       " (perhaps after lowering ppo.learning_rate in its config.yaml)" if last else
+                       "No checkpoint was written yet."))
             if not launch.is_main:
                 continue
             run.log(record, writer)
@@ -176,6 +236,15 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     return record
 
 
+def non_finite(losses: dict, alg: PPO) -> str:
+    """'' when every loss and parameter is finite, else a short description of what is not."""
+    bad = [f"loss_{k}={float(v)}" for k, v in losses.items() if not math.isfinite(float(v))]
+    for name, net in (("actor", alg.actor), ("critic", alg.critic)):
+        if not all(bool(torch.isfinite(p).all()) for p in net.parameters()):
+            bad.append(f"{name} parameters not finite")
+    return ", ".join(bad)
+
+
 def _short(value) -> str:
     return "-" if value is None else f"{value:.2f}"
 
@@ -187,6 +256,6 @@ def save_checkpoint(run: RunDir, alg: PPO, iteration: int, step: int, obs_sizes:
     payload = {"backend": "rsl", "alg": alg.save(), "iteration": iteration, "step": step, "obs_sizes": obs_sizes,
                "num_actions": num_actions, "torch_rng": torch.get_rng_state()}
     if opponent_pool is not None:
-        payload["opponent_pool"] = opponent_pool
+        payload["opponent_pool"] = _as_tensors(opponent_pool)
     torch.save(payload, buffer)
     return run.write_checkpoint(step, "pt", buffer.getvalue())

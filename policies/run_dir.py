@@ -18,11 +18,17 @@ import yaml
 
 from policies.config import ConfigError, TrainConfig, load_config, to_dict
 
-CHECKPOINT = re.compile(r"^step_(\d{12})\.(pt|pkl)$")
+CHECKPOINT = re.compile(r"^step_(\d{12})\.(pt|npz|pkl)$")
+"""Checkpoint file names: .pt (rsl-rl, torch tensors), .npz (Brax, arrays); .pkl (old Brax pickles) is listed
+so that loading it can say how to convert it."""
 
 
 class RunDirError(ValueError):
     """The run directory cannot be used (unwritable, not a run, no checkpoint); the message says why."""
+
+
+class TrainingDiverged(RunDirError):
+    """A loss or a network parameter became NaN or infinite: the run stops before saving it."""
 
 
 def check_compatible(obs_sizes: dict, num_actions: int, env, source) -> None:
@@ -75,14 +81,15 @@ class RunDir:
             raise RunDirError(f"{self.config_path} is unusable: {exc}") from None
 
     def log(self, record: dict, writer=None) -> None:
-        """Append a metrics record (and its numbers to TensorBoard when a writer is given)."""
-        clean = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in record.items()}
+        """Append a metrics record (and its numbers to TensorBoard when a writer is given). A non-finite
+        number is written as the string "nan", "inf" or "-inf": valid JSON that keeps it visible."""
+        clean = {k: (str(v) if isinstance(v, float) and not math.isfinite(v) else v) for k, v in record.items()}
         with open(self.metrics_path, "a") as f:
             f.write(json.dumps(clean) + "\n")
             f.flush()
             os.fsync(f.fileno())
         if writer is not None:
-            for k, v in clean.items():
+            for k, v in record.items():
                 if k != "step" and isinstance(v, (int, float)) and v is not None:
                     writer.add_scalar(k, v, record["step"])
             writer.flush()
@@ -125,6 +132,22 @@ class RunDir:
         path = self.checkpoint_path(step, suffix)
         self._atomic_write(path, payload)
         return path
+
+    def clean_stale(self) -> list[Path]:
+        """Remove temporary files that killed processes left behind (`.<name>.<pid>.tmp`); returns them."""
+        removed = []
+        for tmp in list(self.path.glob(".*.tmp")) + list(self.checkpoint_dir.glob(".*.tmp")):
+            try:
+                pid = int(tmp.name.rsplit(".", 2)[-2])
+                os.kill(pid, 0)  # still running: its file is being written
+                continue
+            except (ValueError, ProcessLookupError):
+                pass
+            except PermissionError:  # another user's live process
+                continue
+            tmp.unlink(missing_ok=True)
+            removed.append(tmp)
+        return removed
 
     @staticmethod
     def _atomic_write(path: Path, payload: bytes) -> None:

@@ -9,20 +9,20 @@ from policies.config import TrainConfig, apply_overrides
 from policies.run_dir import RunDir
 
 
-def build_env(config: TrainConfig):
-    """The run's environment: confined tasks on traversable worlds with planned waypoints; soccer tasks as
-    the learner's view of the game (agent 0; the others driven by opponents given to each step)."""
-    from legged.soccer.task_config import SoccerConfig
+def build_env(config: TrainConfig, progress: bool = True):
+    """The run's environment as its registry entry says: confined tasks on traversable worlds with planned
+    waypoints; soccer tasks as the learner's view of the game (agent 0; the others driven by opponents
+    given to each step)."""
+    from legged.tasks import learner_env, make, task_entry
 
-    if isinstance(config.env, SoccerConfig):
-        from legged.envs import make
-        from legged.soccer.learner import LearnerView
-        from legged.soccer.opponents import OpponentNet
+    entry = task_entry(config.task)
+    if entry.kind == "confined":
+        from planners import make_planned_env
 
-        return LearnerView(make(config.task, config.env), OpponentNet(config.ppo.activation), config.ppo.actor_hidden)
-    from planners import make_planned_env
-
-    return make_planned_env(config.task, config=config.env)
+        env = make_planned_env(config.task, config=config.env, progress=progress)
+    else:
+        env = make(config.task, config.env)
+    return learner_env(entry, env, config.ppo.activation, config.ppo.actor_hidden)
 
 
 def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> dict:
@@ -54,9 +54,11 @@ def _prepare(config: TrainConfig) -> bool:
 
 
 def start_run(task: str, run_dir: str | None, backend: str = "rsl", num_envs: int = 256, timesteps: int = 1_000_000,
-              seed: int = 0, overrides: list[str] = (), progress: bool = True) -> dict:
+              seed: int = 0, overrides: list[str] = (), progress: bool = True, physics: str = "mjx",
+              threads: int = 0) -> dict:
     """Resolve the config, create the run directory, train; returns the last metrics record."""
-    config = TrainConfig(task=task, backend=backend, num_envs=num_envs, timesteps=timesteps, seed=seed).resolved()
+    config = TrainConfig(task=task, backend=backend, num_envs=num_envs, timesteps=timesteps, seed=seed,
+                         physics=physics, threads=threads).resolved()
     config = apply_overrides(config, list(overrides))
     main = _prepare(config)
     run = RunDir(run_dir or Path("runs") / f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
@@ -72,5 +74,6 @@ def resume_run(run_dir: str, progress: bool = True) -> dict:
     run = RunDir(run_dir)
     config = run.load_config()
     run.latest_checkpoint()  # fail now if there is nothing to resume from
+    run.clean_stale()
     _prepare(config)
     return _train(config, run, resume=True, progress=progress)

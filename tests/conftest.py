@@ -4,8 +4,9 @@ import jax
 import pytest
 
 import legged  # noqa: F401  (quiet MJX import)
-from legged.envs import make
+from legged.tasks import make
 from legged.envs.confined import ConfinedConfig, ConfinedEnv
+from legged.envs.physics import view_of_mjx
 from legged.worlds import Terrain, generate_world
 
 BATCH = 8
@@ -27,6 +28,8 @@ class Compiled:
         self.step = jax.jit(jax.vmap(env.step))
         self.transition = jax.jit(jax.vmap(env.transition))
         self.contact_forces = jax.jit(jax.vmap(env.contact_forces))
+        self.view = jax.jit(jax.vmap(lambda data: view_of_mjx(data, env.contact_forces(data), False)))
+        """The PhysicsView of a batch of MJX data (what `transition` reads)."""
 
     def keys(self, seed=0):
         return jax.random.split(jax.random.PRNGKey(seed), BATCH)

@@ -18,7 +18,7 @@ import pytest
 
 import legged  # noqa: F401  (quiet MJX import)
 from legged.cli import main
-from legged.envs import make
+from legged.tasks import make
 from legged.envs.confined import ConfinedConfig, ConfinedEnv
 from legged.robots import GO1
 from legged.worlds import Terrain, generate_world

@@ -91,7 +91,7 @@ def test_cli_bench_plan_json(capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["plan", "--planner", "dijkstra"], "unknown planner"),
-    (["plan", "--time-limit", "0"], "time_limit must be > 0"),
+    (["plan", "--time-limit", "0"], "argument --time-limit: must be greater than 0"),
     (["plan", "--scene", "missing.xml"], "needs --start"),
 ])
 def test_cli_plan_rejects_bad_input_before_planning(capsys, argv, message):

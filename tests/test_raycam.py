@@ -174,7 +174,7 @@ def test_agrees_with_mujocos_renderer_and_writes_images(soccer, tmp_path):
 
 def test_camera_states_are_the_environment_resets():
     """`legged camera --seed S` shows the game that the environment's reset with key S starts."""
-    from legged.envs import make
+    from legged.tasks import make
     from legged.soccer.states import game_start
 
     env = make("soccer-1v1")

@@ -8,7 +8,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from legged.envs import make
+from legged.envs.physics import PhysicsView, view_of_mjx
+from legged.tasks import make
 from legged.soccer import observe
 from legged.soccer.opponents import OpponentNet, network_opponent, opponent_actions, scripted_opponent
 from legged.soccer.pitch import kickoff_poses
@@ -33,8 +34,14 @@ def _with_ball(g, xyz, state=None):
     """A state whose physics has the ball moved to xyz (and the transition's output from it)."""
     state = g.one if state is None else state
     adr = g.env.layout.ball_qpos_adr
-    data = state.pipeline_state.replace(qpos=state.pipeline_state.qpos.at[adr:adr + 3].set(jnp.asarray(xyz)))
+    data = _view(state.pipeline_state)
+    data = data.replace(qpos=data.qpos.at[adr:adr + 3].set(jnp.asarray(xyz)))
     return g.transition(state, data, jnp.zeros((g.env.n_agents, g.env.action_size)))
+
+
+def _view(data):
+    """What the transition reads of an MJX data (or a view, as it is)."""
+    return data if isinstance(data, PhysicsView) else view_of_mjx(data, jnp.zeros(0), False)
 
 
 def test_per_agent_shapes_and_no_nan_under_random_actions(game):
@@ -84,6 +91,7 @@ def test_a_goal_scores_for_one_team_and_restarts_from_kickoff(game):
     assert np.allclose(qpos[lay.ball_qpos_adr:lay.ball_qpos_adr + 3], [0.0, 0.0, scene.ball_radius])
     assert np.allclose(qpos[lay.root_qpos_adr[:, None] + np.arange(2)], kickoff_poses(scene)[:, :2], atol=1e-6)
     assert np.allclose(home_goal.pipeline_state.qvel, 0.0)
+    assert bool(home_goal.info["teleported"])  # the engines load the moved bodies
     away_goal = _with_ball(game, [-behind, 0.0, scene.ball_radius])
     assert np.allclose(away_goal.metrics["reward/goal"], [-1.0, 1.0])
     assert np.array_equal(away_goal.info["score"], [0, 1])
@@ -106,7 +114,7 @@ def test_a_ball_out_of_play_is_put_back_inside_the_line(game):
 def test_the_learners_fall_ends_the_episode_and_the_time_limit_truncates(game):
     env = game.env
     adr = env.layout.root_qpos_adr[1]
-    data = game.one.pipeline_state
+    data = _view(game.one.pipeline_state)
     opponent_down = game.transition(game.one, data.replace(qpos=data.qpos.at[adr + 2].set(0.1)),
                                     jnp.zeros((2, env.action_size)))
     assert np.array_equal(opponent_down.metrics["fell"], [0.0, 1.0]) and float(opponent_down.done) == 0.0

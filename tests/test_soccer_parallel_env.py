@@ -27,9 +27,9 @@ def test_vision_observations_are_the_head_camera_images(vision_game):
     obs, infos = env.reset(seed=5)
     for _ in range(3):
         obs, rewards, terminations, truncations, infos = env.step({a: np.zeros(20, np.float32) for a in env.agents})
-    game = env.runner.env
+    game = env.env
     try:
-        native = native_images(game.mj_model, env.runner.data, game.camera)
+        native = native_images(game.mj_model, env.runner.data(0), game.camera)
     except RuntimeError as exc:
         pytest.skip(f"no native rendering here: {exc}")
     for i, agent in enumerate(env.possible_agents):

@@ -65,7 +65,7 @@ def test_camera_tasks_get_a_cnn_actor_that_saves_loads_and_acts(tmp_path):
 
 
 def test_soccer_configs_fail_before_any_work():
-    with pytest.raises(ConfigError, match="needs --backend rsl"):
+    with pytest.raises(ConfigError, match="trains with --backend rsl"):
         TrainConfig(task="soccer-1v1-vision", backend="brax").resolved()
     with pytest.raises(ConfigError, match="selfplay.opponent=scripted"):
         apply_overrides(TrainConfig(task="soccer-1v1", backend="brax").resolved(), ["selfplay.opponent=self-play"])

@@ -4,15 +4,15 @@ One tiny go1-flat env (10-step episodes) is compiled once and shared by every te
 object or batch size would compile again (about a minute on 2 CPU cores).
 """
 
-
+import numpy as np
 import pytest
 import torch
 
 import policies.training as training
-from legged.envs import make
+from legged.tasks import make
 from legged.envs.vector import VectorEnv
 from policies.config import ConfigError, TrainConfig, apply_overrides
-from policies.evaluate import evaluate_mjx, summarize
+from policies.evaluate import evaluate, summarize
 from policies.export import export_onnx
 from policies.policy_io import load_policy
 from policies.rsl_vecenv import RslVecEnv
@@ -88,13 +88,34 @@ def test_eval_is_deterministic_and_onnx_matches(trained_run, tiny_env, tmp_path)
     run_dir, _, _ = trained_run
     policy, config = load_policy(run_dir)
     assert policy.step == 120 and policy.obs_size == 42
-    first = evaluate_mjx(tiny_env, policy, episodes=BATCH, seed=3, num_envs=BATCH, progress=False)
-    again = evaluate_mjx(tiny_env, policy, episodes=BATCH, seed=3, num_envs=BATCH, progress=False)
+    first = evaluate(tiny_env, policy, episodes=BATCH, seed=3, num_envs=BATCH, progress=False)
+    again = evaluate(tiny_env, policy, episodes=BATCH, seed=3, num_envs=BATCH, progress=False)
     assert first == again
     report = summarize(first, confined=False)
     assert report["episodes"] == BATCH and report["episode_length_steps"] == 10.0
+    assert 0.0 <= report["tracking_error_mps"] and report["fall_rate"] == 0.0
+    native = summarize(evaluate(tiny_env, policy, episodes=BATCH, seed=3, physics="native", num_envs=BATCH,
+                                progress=False), confined=False)
+    assert native["episodes"] == BATCH and native["episode_length_steps"] == 10.0
+    assert native["episode_return"] == pytest.approx(report["episode_return"], rel=0.05)  # sim-to-sim
+    halves = evaluate(tiny_env, policy, episodes=BATCH, seed=3, physics="native", num_envs=BATCH // 2, progress=False)
+    assert len(halves) == BATCH and all(f["length"] == 10.0 for f in halves)  # two rounds, every episode whole
     export = export_onnx(policy, tmp_path / "policy.onnx")
     assert export["max_abs_diff"] <= 1e-4 and (tmp_path / "policy.onnx").stat().st_size > 1000
+
+
+def test_native_training_is_reproducible(tiny_env, tmp_path, monkeypatch):
+    """Two native-physics runs with the same seed and thread count log the same metrics."""
+    monkeypatch.setattr(training, "build_env", lambda config: tiny_env)
+    runs, torch_threads = [], torch.get_num_threads()
+    for name in ("a", "b"):
+        training.start_run("go1-flat", str(tmp_path / name), num_envs=BATCH, timesteps=80, overrides=TINY,
+                           progress=False, physics="native", threads=1)
+        runs.append([{k: v for k, v in r.items() if k not in ("steps_per_s", "wall_s")}
+                     for r in RunDir(tmp_path / name).metrics()])
+    torch.set_num_threads(torch_threads)
+    assert runs[0] == runs[1] and len(runs[0]) == 2
+    assert RunDir(tmp_path / "a").load_config().physics == "native"
 
 
 def test_confined_summary_metrics():
@@ -149,3 +170,56 @@ def test_torchrun_launch_splits_environments():
     with pytest.raises(ConfigError, match="bad torchrun environment"):
         Launch.from_env({"WORLD_SIZE": "2", "RANK": "2"})
     assert Launch.from_env({}).multi_gpu_config() is None
+
+
+def test_a_diverging_run_stops_keeps_its_last_good_checkpoint_and_resumes(tiny_env, tmp_path, monkeypatch):
+    """A parameter turned NaN by an update stops the run: nothing is saved after it, NaN-free resume."""
+    from rsl_rl.algorithms import PPO
+
+    from policies.rsl_backend import TrainingDiverged
+
+    monkeypatch.setattr(training, "build_env", lambda config: tiny_env)
+    real_update, calls = PPO.update, []
+
+    def poisoned_update(self):
+        losses = real_update(self)
+        calls.append(1)
+        if len(calls) == 2:
+            next(self.actor.parameters()).data.fill_(float("nan"))
+        return losses
+
+    monkeypatch.setattr(PPO, "update", poisoned_update)
+    run_dir = tmp_path / "diverging"
+    with pytest.raises(TrainingDiverged, match="actor parameters not finite.*step_000000000040.pt"):
+        training.start_run("go1-flat", str(run_dir), num_envs=BATCH, timesteps=120, overrides=TINY, progress=False)
+    run = RunDir(run_dir)
+    assert [p.name for p in run.checkpoints()] == ["step_000000000040.pt"]
+    assert [r["step"] for r in run.metrics()] == [40, 80]  # the bad iteration is logged, not saved
+    monkeypatch.setattr(PPO, "update", real_update)
+    record = training.resume_run(str(run_dir), progress=False)
+    assert record["step"] == 120 and all(np.isfinite(v) for k, v in record.items() if k.startswith("loss_"))
+
+
+def test_pickled_checkpoints_are_refused_until_converted_by_the_user(trained_run, tmp_path):
+    """A checkpoint holding numpy objects (pickles) is not loaded; `convert-checkpoints --trust-pickles`
+    rewrites it as tensors, after which the safe loader reads it."""
+    import shutil
+
+    from policies.convert import convert_run
+    from policies.rsl_backend import load_checkpoint
+
+    run_dir, _, _ = trained_run
+    copy = tmp_path / "old-run"
+    shutil.copytree(run_dir, copy)
+    path = RunDir(copy).latest_checkpoint()
+    payload = load_checkpoint(path)
+    payload["opponent_pool"] = {"snapshots": [{"weight": 1.0, "mean": np.ones(3, np.float32)}], "rng": {"state": 7}}
+    torch.save(payload, path)  # numpy arrays inside: a pickle
+    with pytest.raises(RunDirError, match="not loaded"):
+        load_checkpoint(path)
+    with pytest.raises(RunDirError, match="--trust-pickles"):
+        convert_run(copy, trust_pickles=False)
+    report = convert_run(copy, trust_pickles=True)
+    assert report["converted"] == [str(path)]
+    pool = load_checkpoint(path)["opponent_pool"]
+    assert isinstance(pool["snapshots"][0]["mean"], np.ndarray) and pool["snapshots"][0]["mean"].sum() == 3.0

@@ -1,4 +1,4 @@
-"""Recording rollouts of an MJX environment into Trajectories (joint positions, rewards, metrics, overlays).
+"""Recording rollouts of an environment (MJX or native physics) into Trajectories (joint positions, rewards, metrics, overlays).
 
 The environment runs vmapped over a small batch, compiled once per Recorder. An environment whose episode
 ends is frozen at its last state. Without a policy every action is zero: Go1 is held at its default pose
@@ -31,6 +31,8 @@ class RecorderConfig:
     """Sideways distance between robots drawn on a scene without height fields, metres."""
     distinct_tiles: bool = True
     """On tiled terrains, pick reset keys so that the environments start in different worlds."""
+    physics: str = "mjx"
+    """Physics engine of the rollouts: mjx or native (MuJoCo's C engine, the same task code)."""
 
 
 class Recorder:
@@ -43,8 +45,18 @@ class Recorder:
         self.has_path = hasattr(env, "path_of")
         self.has_scans = hasattr(env, "scan_world_points")
         self.has_head_camera = hasattr(env, "camera_images")  # soccer: the learner's head camera
-        self._reset = jax.jit(lambda keys: self._with_extras(jax.vmap(env.reset)(keys)))
-        self._step = jax.jit(self._step_frozen)
+        if config.physics == "native":
+            from legged.envs.native import NativeEnvs
+
+            native = NativeEnvs(env, config.num_envs, cameras=self.has_head_camera)
+            extras, frozen = jax.jit(self._with_extras), jax.jit(self._frozen)
+            self._reset = lambda keys: extras(native.reset(keys))
+            self._step = lambda state, action: frozen(state, native.step(state, action))
+        elif config.physics == "mjx":
+            self._reset = jax.jit(lambda keys: self._with_extras(jax.vmap(env.reset)(keys)))
+            self._step = jax.jit(lambda state, action: self._frozen(state, jax.vmap(env.step)(state, action)))
+        else:
+            raise ValueError(f"unknown physics {config.physics!r}; one of mjx, native")
         flat_ground = env.mj_model.nhfield == 0
         n = config.num_envs
         self.offsets = np.zeros((n, 3))
@@ -65,10 +77,9 @@ class Recorder:
     def _with_extras(self, state):
         return state, jax.vmap(self._extras)(state)
 
-    def _step_frozen(self, state, action):
-        nxt = jax.vmap(self.env.step)(state, action)
-        nxt = select_envs(state.done > 0, state, nxt)  # finished episodes stay frozen
-        return self._with_extras(nxt)
+    def _frozen(self, state, nxt):
+        """The stepped states, but finished episodes stay frozen at their last state; with extras."""
+        return self._with_extras(select_envs(state.done > 0, state, nxt))
 
     # ------------------------------------------------------------------ recording
     def reset_keys(self, seed: int) -> jax.Array:

@@ -33,6 +33,8 @@ class ViewRequest:
     """Recorded trajectory (.npz) to play instead of rolling out."""
     num_envs: int = 1
     """Environments side by side."""
+    physics: str = "mjx"
+    """Physics engine of the rollouts: mjx or native."""
     seed: int = 0
     """Seed of the first rollout."""
     steps: int = 500
@@ -132,6 +134,8 @@ def _run_dir_of(request: ViewRequest) -> Path | None:
 
 def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolved:
     """Check the request and build what it asks for (the environment last)."""
+    if request.physics not in ("mjx", "native"):
+        raise ValueError(f"unknown physics {request.physics!r}; one of mjx, native")
     if not 1 <= request.num_envs <= 16:
         raise ValueError(f"--num-envs must be between 1 and 16, got {request.num_envs}")
     if request.steps < 1:
@@ -146,7 +150,7 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
         config = RunDir(run_dir).load_config()
     if request.trajectory is not None:
         return Resolved(source=None, trajectory=load_trajectory(request.trajectory), run_dir=run_dir)
-    from legged.envs import default_config
+    from legged.tasks import default_config
 
     task = request.task or (config.task if config is not None else DEFAULT_TASK)
     if config is not None and task != config.task:
@@ -164,23 +168,18 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
         from policies.run_dir import check_compatible
 
         check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
-    source = RolloutSource(env, task, RecorderConfig(num_envs=request.num_envs), policy, run_dir)
+    source = RolloutSource(env, task, RecorderConfig(num_envs=request.num_envs, physics=request.physics), policy,
+                           run_dir)
     return Resolved(source=source, trajectory=None, run_dir=run_dir)
 
 
 def _build_env(task: str, config):
-    """The environment a run trained on (soccer: the learner's view, scripted opponents), else the task's."""
-    from legged.envs import default_config
-    from legged.soccer.task_config import SoccerConfig
+    """The environment a run trained on (soccer: the learner's view, scripted opponents; confined: planned
+    worlds), else the task's default."""
+    from policies.config import TrainConfig
+    from policies.training import build_env
 
-    if isinstance(default_config(task), SoccerConfig):
-        from policies.config import TrainConfig
-        from policies.training import build_env
-
-        return build_env(config if config is not None else TrainConfig(task=task).resolved())
-    from planners.planned_env import make_planned_env
-
-    return make_planned_env(task, config=config.env if config is not None else None, progress=False)
+    return build_env(config if config is not None else TrainConfig(task=task).resolved(), progress=False)
 
 
 def _has_checkpoints(run_dir: Path) -> bool:

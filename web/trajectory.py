@@ -117,7 +117,9 @@ class Trajectory:
         path = Path(path)
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_bytes(self.to_bytes())
+            tmp = path.with_name(f".{path.name}.tmp")
+            tmp.write_bytes(self.to_bytes())
+            tmp.replace(path)  # a killed save never leaves a half-written trajectory under the real name
         except OSError as exc:
             raise OSError(f"cannot write trajectory {path}: {exc.strerror}") from None
         return path

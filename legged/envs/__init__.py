@@ -1,5 +1,1 @@
-"""MJX legged-robot environments (Brax API). Use `legged.envs.make(task)`."""
-
-from legged.envs.registry import TASKS, UnknownTaskError, default_config, make
-
-__all__ = ["TASKS", "UnknownTaskError", "default_config", "make"]
+"""Legged-robot environments (Brax API) on MJX or native MuJoCo. Build one with `legged.tasks.make(task)`."""

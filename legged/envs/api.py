@@ -1,15 +1,108 @@
-"""The Brax `Env` properties every environment here derives the same way (one place, not one per env)."""
+"""The environment base every task here shares: Brax `Env` properties and MJX stepping of the four verbs.
+
+A task implements `spawn`, `first_state`, `prepare` and `transition` (the seam of legged.envs.physics)
+plus a few engine read-outs (`mjx_model_for`, `contact_forces`, `native_model_fields`); `reset` and
+`step` here run them with MJX, and legged.envs.native runs the same four with native MuJoCo.
+"""
 
 from __future__ import annotations
 
+import abc
+
 import jax
 import jax.numpy as jnp
-from brax.envs.base import Env
+import numpy as np
+from brax.envs.base import Env, State
+from mujoco import mjx
+
+from legged.envs.physics import PhysicsView, Spawn, reject_divergence, strong_types, view_of_mjx
 
 
-class MjxEnv(Env):
-    """Brax Env properties from `self.config.ctrl_dt`, `self.robot` and the observations `reset` returns."""
+class MjxEnv(Env, abc.ABC):
+    """Brax Env over the four task verbs; `self.config` (ctrl_dt, n_substeps, divergence_qvel), `self.robot`,
+    `self.mj_model` and `self.mjx_model` come from the subclass."""
 
+    # ----------------------------------------------------------------- the task's verbs
+    @abc.abstractmethod
+    def spawn(self, rng: jax.Array) -> Spawn:
+        """A new episode's physical state and info (randomisation included)."""
+
+    @abc.abstractmethod
+    def first_state(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
+        """The first State of an episode from the view of its forward-computed spawn."""
+
+    @abc.abstractmethod
+    def prepare(self, state: State, action: jax.Array, *args) -> tuple[jax.Array, jax.Array]:
+        """(ctrl for physics, actions as `transition` sees them) for a control step."""
+
+    @abc.abstractmethod
+    def transition(self, state: State, view: PhysicsView, actions: jax.Array) -> State:
+        """The next State from stepped physics; its `pipeline_state` is the view after the task's rules (which
+        may move bodies: then `info['teleported']` is set and the engine loads the view's qpos, qvel, ctrl)."""
+
+    # ----------------------------------------------------------------- engine read-outs
+    def mjx_model_for(self, info: dict):
+        """The MJX model of an episode (its randomisation applied)."""
+        return self.mjx_model
+
+    def contact_forces(self, data) -> jax.Array:
+        """Normal force on each watched geom (`watched_geoms`) of an MJX data."""
+        return jnp.zeros(0)
+
+    def native_model_fields(self, info: dict, rows: np.ndarray) -> dict:
+        """Model fields (name -> numpy array, one row per entry of `rows`) of the episodes `rows` of a batched
+        `info`, for native MuJoCo; {} when nominal."""
+        return {}
+
+    def native_model(self):
+        """The MjModel the native engine steps: `mj_model` plus read-out sensors where the task needs them."""
+        return self.mj_model
+
+    @property
+    def watched_geoms(self) -> np.ndarray:
+        """Geom ids whose normal contact force `PhysicsView.contact_force` reports."""
+        return np.zeros(0, np.int32)
+
+    @property
+    def uses_cameras(self) -> bool:
+        """Whether the observations render cameras (the view then carries geom and camera poses)."""
+        return False
+
+    def mjx_settle(self, model, data):
+        """Derived fields of a spawned MJX data (default: mj_forward)."""
+        return mjx.forward(model, data)
+
+    # ----------------------------------------------------------------- what both engines call
+    def start_episode(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
+        """`first_state` with canonical (strong) dtypes."""
+        return strong_types(self.first_state(view, info, rng))
+
+    def advance(self, state: State, view: PhysicsView, actions: jax.Array) -> State:
+        """`transition` with canonical (strong) dtypes."""
+        return strong_types(self.transition(state, view, actions))
+
+    # ----------------------------------------------------------------- MJX engine
+    def reset(self, rng: jax.Array) -> State:
+        rng, k_obs = jax.random.split(rng)
+        spawn = self.spawn(rng)
+        model = self.mjx_model_for(spawn.info)
+        data = mjx.make_data(model).replace(qpos=spawn.qpos, qvel=spawn.qvel, ctrl=spawn.ctrl)
+        data = self.mjx_settle(model, data)
+        view = view_of_mjx(data, self.contact_forces(data), False, self.uses_cameras)
+        return self.start_episode(view, spawn.info, k_obs).replace(pipeline_state=data)
+
+    def step(self, state: State, action: jax.Array, *args) -> State:
+        ctrl, actions = self.prepare(state, action, *args)
+        model = self.mjx_model_for(state.info)
+        previous = state.pipeline_state
+        data = jax.lax.scan(lambda d, _: (mjx.step(model, d), None), previous.replace(ctrl=ctrl), None,
+                            length=self.config.n_substeps)[0]
+        bad, data = reject_divergence(data, previous, self.config.divergence_qvel)
+        nxt = self.advance(state, view_of_mjx(data, self.contact_forces(data), bad, self.uses_cameras), actions)
+        moved = nxt.pipeline_state
+        return nxt.replace(pipeline_state=data.replace(qpos=moved.qpos, qvel=moved.qvel, ctrl=moved.ctrl))
+
+    # ----------------------------------------------------------------- Brax Env properties
     @property
     def dt(self) -> float:
         """Control period, seconds."""
@@ -32,13 +125,13 @@ class MjxEnv(Env):
         """Size of each observation: an int for vectors, a shape tuple otherwise (e.g. camera images)."""
         return {k: int(s[0]) if len(s) == 1 else tuple(int(d) for d in s) for k, s in self.observation_size.items()}
 
+    def zero_metrics(self, view: PhysicsView, info: dict, actions: jax.Array) -> dict:
+        """Zeros shaped like `State.metrics` (traced once, without compiling)."""
+        if self.__dict__.get("_metric_shapes") is None:
+            probe = State(view, {}, jnp.float32(0), jnp.float32(0), {}, info)
+            self._metric_shapes = jax.eval_shape(lambda s, v, a: self.transition(s, v, a).metrics, probe, view, actions)
+        return {k: jnp.zeros(s.shape, s.dtype) for k, s in self._metric_shapes.items()}
+
     @property
     def backend(self) -> str:
         return "mjx"
-
-
-def reject_divergence(data, previous, limit: float):
-    """(bad, data): `bad` when stepped physics `data` has a NaN or |qvel| above `limit`; then `data` is
-    replaced by `previous` (the last good state), so a diverged environment never spreads NaNs."""
-    bad = ~(jnp.all(jnp.isfinite(data.qpos)) & jnp.all(jnp.isfinite(data.qvel)) & jnp.all(jnp.abs(data.qvel) < limit))
-    return bad, jax.tree_util.tree_map(lambda new, old: jnp.where(bad, old, new), data, previous)

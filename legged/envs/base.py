@@ -1,8 +1,9 @@
-"""The shared MJX legged-robot environment: PD control, physics stepping, randomisation, observations.
+"""The shared legged-robot environment: PD control, randomisation, observations, rewards, terminations.
 
 Tasks subclass `LeggedEnv` and implement four hooks (`_task_reset`, `_command`, `_exteroception`,
-`_task_step`). `transition` turns a stepped physics state into the next environment State and is the
-same code whether the physics came from MJX (`step`) or from native MuJoCo (legged.envs.native).
+`_task_step`). The engine verbs (`spawn`, `first_state`, `prepare`, `transition`; legged.envs.physics)
+are the same code whether physics runs in MJX (`reset`/`step`, legged.envs.api) or in native MuJoCo
+(legged.envs.native).
 """
 
 from __future__ import annotations
@@ -11,13 +12,15 @@ import abc
 
 import jax
 import jax.numpy as jnp
+import mujoco
 import numpy as np
 from brax.envs.base import State
 from mujoco import mjx
 
-from legged.envs.api import MjxEnv, reject_divergence
+from legged.envs.api import MjxEnv
 from legged.envs.config import EnvConfig
 from legged.envs.contacts import MjxContactReader
+from legged.envs.physics import PhysicsView, Spawn
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
 from legged.envs.rewards import penalty_terms
 from legged.robots.spec import RobotSpec
@@ -29,27 +32,28 @@ from legged.worlds.terrain import Terrain
 def randomized_fields(base: dict, dr: dict, trunk: int, xp=jnp) -> dict:
     """Model fields after applying randomisation parameters `dr` to the nominal fields `base`.
 
-    Works with jax.numpy (MJX models, per environment under vmap) and numpy (native models).
+    One function for both engines: jax.numpy for MJX models (per environment, under vmap) and numpy for
+    native ones, where `dr` may carry a leading batch axis (one row per simulation).
     """
-    mass = base["body_mass"] * dr["mass_scale"]
-    mass_trunk = mass[trunk] + dr["base_mass"]
-    inertia = base["body_inertia"] * dr["mass_scale"][:, None]
-    if xp is jnp:
-        mass = mass.at[trunk].set(mass_trunk)
-        inertia = inertia.at[trunk].multiply(mass_trunk / mass[trunk])
-        ipos = base["body_ipos"].at[trunk].add(dr["com"])
-    else:
-        inertia[trunk] *= mass_trunk / mass[trunk]
-        mass[trunk] = mass_trunk
-        ipos = base["body_ipos"].copy()
-        ipos[trunk] += dr["com"]
-    friction = xp.concatenate([xp.full(base["pair_friction"].shape[:1] + (2,), dr["friction"]),
-                               base["pair_friction"][:, 2:]], axis=1)
-    kp = base["actuator_gainprm"][:, 0] * dr["kp"] * dr["strength"]
-    kd = -base["actuator_biasprm"][:, 2] * dr["kd"] * dr["strength"]
-    gain = xp.concatenate([kp[:, None], base["actuator_gainprm"][:, 1:]], axis=1)
-    bias = xp.concatenate([base["actuator_biasprm"][:, :1], -kp[:, None], -kd[:, None],
-                           base["actuator_biasprm"][:, 3:]], axis=1)
+    scale = dr["mass_scale"]                                       # [..., nbody]
+    is_trunk = xp.arange(scale.shape[-1]) == trunk
+    mass = base["body_mass"] * scale
+    mass_trunk = mass[..., trunk] + dr["base_mass"]
+    ratio = xp.where(is_trunk, (mass_trunk / mass[..., trunk])[..., None], 1.0)
+    inertia = base["body_inertia"] * (scale * ratio)[..., None]
+    mass = xp.where(is_trunk, mass_trunk[..., None], mass)
+    ipos = base["body_ipos"] + is_trunk[:, None] * xp.asarray(dr["com"])[..., None, :]
+    pairs = base["pair_friction"]
+    friction = xp.concatenate([xp.broadcast_to(xp.asarray(dr["friction"])[..., None, None], mass.shape[:-1] + (len(pairs), 2)),
+                               xp.broadcast_to(pairs[:, 2:], mass.shape[:-1] + pairs[:, 2:].shape)], axis=-1)
+    gain0, bias0 = base["actuator_gainprm"], base["actuator_biasprm"]
+    strength = dr["strength"]                                      # [..., nu]
+    kp = gain0[:, 0] * xp.asarray(dr["kp"])[..., None] * strength
+    kd = -bias0[:, 2] * xp.asarray(dr["kd"])[..., None] * strength
+    lead = strength.shape[:-1]
+    gain = xp.concatenate([kp[..., None], xp.broadcast_to(gain0[:, 1:], lead + gain0[:, 1:].shape)], axis=-1)
+    bias = xp.concatenate([xp.broadcast_to(bias0[:, :1], lead + (len(bias0), 1)), -kp[..., None], -kd[..., None],
+                           xp.broadcast_to(bias0[:, 3:], lead + bias0[:, 3:].shape)], axis=-1)
     return dict(body_mass=mass, body_inertia=inertia, body_ipos=ipos, pair_friction=friction,
                 actuator_gainprm=gain, actuator_biasprm=bias)
 
@@ -58,7 +62,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
     """A Brax-compatible MJX environment for one legged robot on a terrain."""
 
     def __init__(self, robot: RobotSpec, terrain: Terrain, scene: SceneOptions, config: EnvConfig):
-        self.robot, self.terrain, self.config = robot, terrain, config
+        self.robot, self.terrain, self.config, self.scene = robot, terrain, config, scene
         self.n_substeps = config.n_substeps
         self.mj_model = compile_scene(terrain, robot, scene)
         self.mj_model.opt.timestep = config.sim_dt
@@ -156,43 +160,56 @@ class LeggedEnv(MjxEnv, abc.ABC):
         target = self._default_pose + self.robot.action_scale * a
         return jnp.clip(target, self._ctrl_range[:, 0], self._ctrl_range[:, 1])
 
-    def physics_step(self, dr: dict, data, action: jax.Array):
-        """Advance MJX physics by one control period with the action's PD targets."""
-        model = self.model_with(dr)
-        data = data.replace(ctrl=self.joint_targets(action))
-        return jax.lax.scan(lambda d, _: (mjx.step(model, d), None), data, None, length=self.n_substeps)[0]
+    # ----------------------------------------------------------------- engine verbs and read-outs
+    def mjx_model_for(self, info: dict):
+        return self.model_with(info["dr"])
+
+    def native_model_fields(self, info: dict, rows: np.ndarray) -> dict:
+        if not self.config.randomization.enabled:
+            return {}
+        dr = jax.tree_util.tree_map(lambda x: np.asarray(x)[rows], info["dr"])
+        nominal = {k: np.array(v) for k, v in self._base_fields.items()}
+        return randomized_fields(nominal, dr, self._trunk, xp=np)
+
+    @property
+    def watched_geoms(self) -> np.ndarray:
+        return np.concatenate([self._feet, self._body_geoms])
+
+    def native_model(self) -> mujoco.MjModel:
+        """The scene with a contact sensor on every watched geom, for the native engine."""
+        names = tuple(self.robot.feet_geoms) + tuple(self.robot.body_geoms)
+        model = compile_scene(self.terrain, self.robot, self.scene, contact_sensors=names)
+        model.opt.timestep = self.config.sim_dt
+        return model
 
     def contact_forces(self, data) -> jax.Array:
-        """Normal contact force on each foot, then on each body geom (N)."""
+        """Normal contact force on each foot, then on each body geom (N), of an MJX data."""
         return self._contacts(data)
 
-    def reset(self, rng: jax.Array) -> State:
-        rng, k_dr, k_task, k_noise = jax.random.split(rng, 4)
+    def spawn(self, rng: jax.Array) -> Spawn:
+        rng, k_dr, k_task = jax.random.split(rng, 3)
         dr = self.randomize(k_dr)
         pos, yaw, task_info = self._task_reset(k_task)
         qpos = jnp.zeros(self.mj_model.nq).at[0:3].set(pos).at[3:7].set(quat_from_yaw(yaw))
         qpos = qpos.at[self._qadr].set(self._default_pose)
-        model = self.model_with(dr)
-        data = mjx.make_data(model).replace(qpos=qpos, ctrl=self._default_pose)
-        data = mjx.forward(model, data)
         info = dict(rng=rng, dr=dr, last_action=jnp.zeros(self.action_size), last_qvel=jnp.zeros(self.action_size),
                     step=jnp.int32(0), collisions=jnp.float32(0.0), truncation=jnp.float32(0.0), **task_info)
-        forces = self.contact_forces(data)
-        obs = self._observe(data, info, forces, k_noise)
-        probe = State(data, obs, jnp.float32(0), jnp.float32(0), {}, info)
-        metrics = jax.tree_util.tree_map(jnp.zeros_like, self.transition(probe, data, info["last_action"], forces).metrics)
-        return State(data, obs, jnp.float32(0.0), jnp.float32(0.0), metrics, info)
+        return Spawn(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv), ctrl=self._default_pose, info=info)
 
-    def step(self, state: State, action: jax.Array) -> State:
-        data = self.physics_step(state.info["dr"], state.pipeline_state, action)
-        return self.transition(state, data, action, self.contact_forces(data))
+    def first_state(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
+        obs = self._observe(view, info, rng)
+        metrics = self.zero_metrics(view, info, info["last_action"])
+        return State(view, obs, jnp.float32(0.0), jnp.float32(0.0), metrics, info)
+
+    def prepare(self, state: State, action: jax.Array) -> tuple[jax.Array, jax.Array]:
+        return self.joint_targets(action), action
 
     # ----------------------------------------------------------------- shared transition
-    def transition(self, state: State, data, action: jax.Array, forces: jax.Array) -> State:
-        """Next State from stepped physics `data` (MJX or native) and contact forces; pure and jittable."""
+    def transition(self, state: State, data: PhysicsView, action: jax.Array) -> State:
+        """Next State from the view of stepped physics (MJX or native); pure and jittable."""
         cfg = self.config
-        bad, data = reject_divergence(data, state.pipeline_state, cfg.divergence_qvel)
-        forces = jnp.where(bad, 0.0, forces)
+        bad = data.diverged
+        forces = jnp.where(bad, 0.0, data.contact_force)
         info = dict(state.info)
         info["rng"], k_noise = jax.random.split(info["rng"])
         info["step"] = info["step"] + 1
@@ -212,10 +229,13 @@ class LeggedEnv(MjxEnv, abc.ABC):
         fell = (height < cfg.fall_height) | (up_z(self.base_rotation(data)) < cfg.flip_up_z)
         time_out = info["step"] >= cfg.episode_steps
         done = fell | success | time_out | bad
-        reward = jnp.where(bad, 0.0, sum(terms.values()))
+        reward = sum(terms.values())
+        if cfg.only_positive_rewards:
+            reward = jnp.maximum(reward, 0.0)
+        reward = jnp.where(bad, 0.0, reward)
         info["truncation"] = (time_out & ~fell & ~success & ~bad).astype(jnp.float32)
         info["last_action"], info["last_qvel"] = action, qd
-        obs = self._observe(data, info, forces, k_noise)
+        obs = self._observe(data, info, k_noise)
         metrics = {f"reward/{k}": v for k, v in terms.items()}
         metrics.update(task_metrics, diverged=bad.astype(jnp.float32), fell=fell.astype(jnp.float32),
                        collisions=info["collisions"], base_height=height)
@@ -240,7 +260,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
         """The task's PenaltyScales."""
 
     # ----------------------------------------------------------------- observations
-    def _observe(self, data, info, forces, rng) -> dict:
+    def _observe(self, data: PhysicsView, info, rng) -> dict:
         noise = self.config.noise
         rot = self.base_rotation(data)
         gravity = rotate_inv(rot, jnp.array([0.0, 0.0, -1.0]))
@@ -258,7 +278,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
         dr = info["dr"]
         lin_vel = rotate_inv(rot, data.qvel[0:3])
         privileged = jnp.concatenate([
-            clean, lin_vel, data.qvel[3:6], forces / self._weight,
+            clean, lin_vel, data.qvel[3:6], data.contact_force / self._weight,
             jnp.stack([dr["friction"], dr["base_mass"], dr["kp"], dr["kd"]]), dr["com"], dr["strength"],
             self._task_privileged(data, info)])
         return {"state": state, "privileged_state": privileged}

@@ -61,6 +61,9 @@ class EnvConfig:
     """A state with |qvel| above this, or any NaN, counts as diverged and is reset."""
     action_clip: float = 10.0
     """Actions are clipped to +-this before scaling."""
+    only_positive_rewards: bool = False
+    """Clip each step's total reward at 0 (legged_gym's rule): then an early fall can never pay by ending
+    a stream of penalties, and the penalties still shape what the policy does while it earns reward."""
     randomization: RandomizationConfig = RandomizationConfig()
     """Domain randomisation."""
     noise: NoiseConfig = NoiseConfig()

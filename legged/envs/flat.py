@@ -29,6 +29,8 @@ class FlatRewards:
     """Times the squared vertical base velocity."""
     ang_vel_xy: float = -0.05
     """Times the squared roll and pitch rates."""
+    feet_air_time: float = 1.0
+    """Times the sum over feet touching down of (air time - 0.5 s), while the command asks to move."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -45,6 +47,8 @@ class FlatConfig(EnvConfig):
     """Task reward weights."""
     penalties: PenaltyScales = PenaltyScales(collisions=-1.0)
     """Penalty weights."""
+    only_positive_rewards: bool = True
+    """Clip each step's total reward at 0 (see EnvConfig)."""
 
 
 class FlatEnv(LeggedEnv):
@@ -63,7 +67,8 @@ class FlatEnv(LeggedEnv):
         cmd = jnp.stack([jax.random.uniform(k[i], minval=r[0], maxval=r[1])
                          for i, r in enumerate((c.lin_vel_x, c.lin_vel_y, c.yaw_rate))])
         yaw = jax.random.uniform(k[3], minval=-jnp.pi, maxval=jnp.pi)
-        return jnp.array([0.0, 0.0, self.robot.standing_height + 0.02]), yaw, dict(command=cmd)
+        info = dict(command=cmd, air_time=jnp.zeros(len(self._feet)), tracking_error_sum=jnp.float32(0.0))
+        return jnp.array([0.0, 0.0, self.robot.standing_height + 0.02]), yaw, info
 
     def _command(self, data, info):
         return info["command"]
@@ -76,11 +81,20 @@ class FlatEnv(LeggedEnv):
         rot = self.base_rotation(data)
         local = yaw_rotate(self.base_yaw(data), data.qvel[0:2])
         ang = rot @ data.qvel[3:6]
+        contact = data.contact_force[:len(self._feet)] > 1.0
+        air = info["air_time"] + self.dt
+        touchdown = contact & (info["air_time"] > 0.0)
+        moving = jnp.linalg.norm(cmd[:2]) > 0.1
+        info["air_time"] = jnp.where(contact, 0.0, air)
+        error = jnp.linalg.norm(cmd[:2] - local)
+        info["tracking_error_sum"] = info["tracking_error_sum"] + error
         terms = {
             "tracking_lin_vel": w.tracking_lin_vel * tracking(jnp.sum(jnp.square(cmd[:2] - local)), 0.25),
             "tracking_yaw_rate": w.tracking_yaw_rate * tracking(jnp.square(cmd[2] - ang[2]), 0.25),
             "lin_vel_z": w.lin_vel_z * jnp.square(data.qvel[2]),
             "ang_vel_xy": w.ang_vel_xy * jnp.sum(jnp.square(data.qvel[3:5])),
+            "feet_air_time": w.feet_air_time * moving * jnp.sum((air - 0.5) * touchdown),
         }
-        metrics = {"command_speed": jnp.linalg.norm(cmd[:2]), "speed": jnp.linalg.norm(local)}
+        metrics = {"command_speed": jnp.linalg.norm(cmd[:2]), "speed": jnp.linalg.norm(local),
+                   "tracking_error_mps": info["tracking_error_sum"] / info["step"]}
         return terms, jnp.bool_(False), metrics, info

@@ -1,76 +1,231 @@
-"""Native-MuJoCo execution of an environment: native physics, the env's own observation/reward code.
+"""Native MuJoCo physics for every task: `mujoco.batch.Batch` under the same task verbs as MJX.
 
-Physics runs in `mujoco.mj_step` on the same MjModel the MJX env was built from (with the episode's
-randomisation applied); the stepped MjData is converted with `mjx.put_data` and handed to the env's
-`transition`, so observations, rewards, terminations and metrics are the same code as in training.
-Used for evaluation and sim-to-sim checks.
+`NativePhysics` is the engine's side of the seam (legged.envs.physics): it loads spawned states and
+randomised model fields into the C engine, steps every simulation on a thread pool that releases the GIL,
+and hands back one batched `PhysicsView`, read in bulk from bound arrays (contact forces from the MJCF
+contact sensors of `env.native_model()`). `NativeEnvs` runs the task's own `spawn`, `first_state`,
+`prepare` and `transition` (jitted and vmapped) around it, so a task is defined once for both engines.
 """
 
 from __future__ import annotations
 
-import copy
+import os
 
 import jax
+import jax.numpy as jnp
 import mujoco
 import numpy as np
 from brax.envs.base import State
+from mujoco.batch import Batch, SimulationError
 
-from legged.envs.base import LeggedEnv, randomized_fields
-from legged.envs.contacts import native_contact_forces
+from legged.envs.physics import CAMERA_FIELDS, PhysicsView, is_diverged
+from legged.worlds.mjcf import CONTACT_SLOTS
 
-
-class NativeRunner:
-    """Steps one episode of `env` with native MuJoCo physics."""
-
-    def __init__(self, env: LeggedEnv):
-        self.env = env
-        self.model = copy.deepcopy(env.mj_model)
-        self.data = mujoco.MjData(self.model)
-        self._nominal = {k: np.array(getattr(env.mj_model, k)) for k in (
-            "body_mass", "body_inertia", "body_ipos", "pair_friction", "actuator_gainprm", "actuator_biasprm")}
-        self._geoms = np.concatenate([env._feet, env._body_geoms])
-        self._reset = jax.jit(env.reset)
-        self._transition = jax.jit(env.transition)
-        self._targets = jax.jit(env.joint_targets)
-        self.state: State | None = None
-
-    def reset(self, rng: jax.Array) -> State:
-        """Start an episode: the env's own reset, copied into native MjData."""
-        return self.start(self._reset(rng))
-
-    def start(self, state: State) -> State:
-        """Continue from an existing (unbatched) environment state, e.g. one made by the MJX env."""
-        dr = jax.tree_util.tree_map(np.asarray, state.info["dr"])
-        if self.env.config.randomization.enabled:
-            for name, value in randomized_fields(self._nominal, dr, self.env._trunk, xp=np).items():
-                getattr(self.model, name)[:] = value
-        mujoco.mj_resetData(self.model, self.data)
-        self.data.qpos[:] = np.asarray(state.pipeline_state.qpos)
-        self.data.qvel[:] = np.asarray(state.pipeline_state.qvel)
-        self.data.ctrl[:] = np.asarray(state.pipeline_state.ctrl)
-        mujoco.mj_forward(self.model, self.data)
-        self.state = state
-        return state
-
-    def step(self, action) -> State:
-        """One control step: PD targets, `n_substeps` native physics steps, then the shared transition."""
-        if self.state is None:
-            raise RuntimeError("call reset() before step()")
-        self.data.ctrl[:] = np.asarray(self._targets(action))
-        for _ in range(self.env.n_substeps):
-            mujoco.mj_step(self.model, self.data)
-        forces = native_contact_forces(self.model, self.data, self._geoms)
-        data = with_native_fields(self.state.pipeline_state, self.data)
-        self.state = self._transition(self.state, data, action, forces.astype(np.float32))
-        return self.state
+_UNSTABLE = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL)
+"""Warnings with which MuJoCo resets an unstable simulation: a divergence, whatever the state looks like."""
 
 
-def with_native_fields(mjx_data, data: mujoco.MjData):
-    """`mjx_data` with the fields the environments' transitions and cameras read copied from native `data`
-    (state, controls, actuator forces, body, geom and camera poses; contacts are passed separately)."""
-    return mjx_data.replace(
-        qpos=data.qpos.copy(), qvel=data.qvel.copy(), ctrl=data.ctrl.copy(),
-        xpos=data.xpos.copy(), xmat=data.xmat.reshape(-1, 3, 3).copy(),
-        geom_xpos=data.geom_xpos.copy(), geom_xmat=data.geom_xmat.reshape(-1, 3, 3).copy(),
-        cam_xpos=data.cam_xpos.copy(), cam_xmat=data.cam_xmat.reshape(-1, 3, 3).copy(),
-        actuator_force=data.actuator_force.copy(), time=data.time)
+def default_threads() -> int:
+    """Physics threads when none are asked for: every core this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def check_threads(threads: int | None) -> int:
+    """`threads` checked (>= 1), or default_threads() for None."""
+    if threads is None:
+        return default_threads()
+    if int(threads) < 1:
+        raise ValueError(f"threads must be >= 1, got {threads}")
+    return int(threads)
+
+
+class NativePhysics:
+    """`num_envs` simulations of a task's native model in a `mujoco.batch.Batch` (numpy in, numpy out)."""
+
+    def __init__(self, env, num_envs: int, threads: int | None = None, cameras: bool = False):
+        if num_envs < 1:
+            raise ValueError(f"num_envs must be >= 1, got {num_envs}")
+        self.model = env.native_model()
+        self.n_substeps = env.config.n_substeps
+        self.limit = env.config.divergence_qvel
+        self.batch = Batch(self.model, num_envs, nthread=check_threads(threads))
+        b = self.batch
+        self._state = {k: b.bind(k) for k in ("qpos", "qvel", "ctrl")}
+        fields = ["xpos", "xmat", "actuator_force"] + (list(CAMERA_FIELDS) if env.uses_cameras or cameras else [])
+        self._derived = {k: b.bind(k) for k in fields}
+        m = self.model
+        names = [mujoco.mj_id2name(env.mj_model, mujoco.mjtObj.mjOBJ_GEOM, int(g)) for g in env.watched_geoms]
+        adr = [m.sensor(f"contact_{n}").adr[0] for n in names]
+        # normal force of slot k of watched geom g: sensordata[adr_g + 3 k]
+        self._normal_index = np.array([[a + 3 * k for k in range(CONTACT_SLOTS)] for a in adr], np.int64)
+        self._sensors = b.bind("sensordata") if len(adr) else None
+        self._warnings = np.asarray(b.warning)
+        self._last: dict | None = None
+
+    @property
+    def num_envs(self) -> int:
+        return self.batch.nsim
+
+    def _read(self) -> dict:
+        """Every field of the view, copied out of the batch (float32 as JAX uses them)."""
+        out = {k: v.astype(np.float32) for k, v in self._state.items()}
+        n = self.num_envs
+        for k, v in self._derived.items():
+            out[k] = v.astype(np.float32).reshape(n, -1, 3, 3) if k.endswith("xmat") else v.astype(np.float32)
+        if self._sensors is None:
+            out["contact_force"] = np.zeros((n, 0), np.float32)
+        else:
+            out["contact_force"] = np.abs(self._sensors[:, self._normal_index]).sum(-1).astype(np.float32)
+        return out
+
+    def _unstable_counts(self) -> np.ndarray:
+        return self._warnings[:, list(map(int, _UNSTABLE)), 1].sum(-1)
+
+    def load(self, ids: np.ndarray, qpos, qvel, ctrl, model_fields: dict | None = None, fresh: bool = True) -> dict:
+        """Give simulations `ids` new states (rows of qpos, qvel, ctrl for those ids). fresh: a new episode
+        (reset first: time 0, no warm start; `model_fields` name -> rows of per-simulation values; derived
+        fields computed at the new state). Otherwise (the task's rules moved bodies) only the state is
+        written. Returns the whole view."""
+        ids = np.asarray(ids, np.int32)
+        b = self.batch
+        if fresh:
+            b.reset(ids, stage=mujoco.mjtStage.mjSTAGE_NONE)
+            for name, values in (model_fields or {}).items():
+                b.expand(name)[ids] = values
+            if model_fields:
+                b.set_const(ids)
+        self._state["qpos"][ids] = qpos
+        self._state["qvel"][ids] = qvel
+        self._state["ctrl"][ids] = ctrl
+        if fresh:
+            b.forward(ids)
+        view = self._read()
+        if self._last is None:
+            self._last = view
+        else:
+            for k in view:
+                self._last[k][ids] = view[k][ids]
+        return view
+
+    def step(self, ctrl: np.ndarray) -> tuple[dict, np.ndarray]:
+        """One control period of every simulation: (view, diverged). A diverged simulation (MuJoCo error or
+        instability, non-finite or too fast state) shows its last good state; its episode must restart."""
+        self._state["ctrl"][:] = ctrl
+        before = self._unstable_counts()
+        failed = np.zeros(self.num_envs, bool)
+        try:
+            self.batch.step(nstep=self.n_substeps)
+        except SimulationError as exc:
+            failed[exc.ids] = True
+        view = self._read()
+        bad = failed | (self._unstable_counts() > before) | is_diverged(view["qpos"], view["qvel"], self.limit, np)
+        if bad.any():
+            for k in view:
+                view[k][bad] = self._last[k][bad]
+        self._last = view
+        return view, bad
+
+
+@jax.jit
+def _select_rows(mask, fresh, state):
+    """`fresh` where `mask` (num_envs,) is set, else `state`."""
+    from legged.envs.vector import select_envs
+
+    return select_envs(mask, fresh, state)
+
+
+@jax.jit
+def _scatter_rows(state, rows_state, rows):
+    """`state` with environments `rows` replaced by the rows of `rows_state` (same tree)."""
+    return jax.tree_util.tree_map(lambda whole, part: whole.at[rows].set(part), state, rows_state)
+
+
+def as_view(fields: dict, diverged) -> PhysicsView:
+    """A batched PhysicsView (JAX arrays) from NativePhysics output."""
+    return PhysicsView(diverged=jnp.asarray(diverged), **{k: jnp.asarray(v) for k, v in fields.items()})
+
+
+class NativeEnvs:
+    """`num_envs` episodes of a task with native physics: the task's own verbs, jitted and vmapped, around
+    NativePhysics. No automatic resets here (legged.envs.vector.VectorEnv adds them). cameras: the views
+    carry geom and camera poses even where the task's observations render none (viewers)."""
+
+    def __init__(self, env, num_envs: int, threads: int | None = None, cameras: bool = False):
+        self.env, self.num_envs = env, num_envs
+        self.physics = NativePhysics(env, num_envs, threads, cameras)
+        def spawn(keys):  # split as MjxEnv.reset splits its key
+            split = jax.vmap(jax.random.split)(keys)
+            return jax.vmap(env.spawn)(split[:, 0]), split[:, 1]
+
+        self._spawn = jax.jit(spawn)
+        self._first = jax.jit(jax.vmap(env.start_episode))
+        self._prepare = jax.jit(lambda state, action, *args: jax.vmap(lambda s, a: env.prepare(s, a, *args))(state, action))
+        self._transition = jax.jit(jax.vmap(env.advance))
+        self._warm = False
+
+    def spawn(self, keys: jax.Array):
+        """(Spawns, observation keys) for reset keys (one per environment), split as MjxEnv.reset does."""
+        return self._spawn(keys)
+
+    def reset(self, keys: jax.Array, ids: np.ndarray | None = None, state: State | None = None) -> State:
+        """Start new episodes from reset `keys` [num_envs] in environments `ids` (all by default); with
+        `state`, the others keep theirs. The same keys give the same first states as MJX's `reset`."""
+        every = state is None or ids is None
+        ids = np.arange(self.num_envs) if every else np.asarray(ids)
+        few = min(self.num_envs, max(16, self.num_envs // 8))  # one compiled size for a few resets
+        if every or len(ids) > few:
+            spawn, k_obs = self.spawn(keys)
+            rows = lambda x: np.asarray(x)[ids]
+            fields = self.env.native_model_fields(spawn.info, ids)
+            view = self.physics.load(ids, rows(spawn.qpos), rows(spawn.qvel), rows(spawn.ctrl), fields)
+            fresh = self._first(as_view(view, np.zeros(self.num_envs, bool)), spawn.info, k_obs)
+            if every:
+                if not self._warm and self.num_envs > 1:  # compile both partial-reset paths now, not mid-run:
+                    self._warm = True  # restarting environments from their own keys changes nothing
+                    self.reset(keys, np.arange(1), fresh)
+                    self.reset(keys, np.arange(min(few + 1, self.num_envs)), fresh)
+                return fresh
+            mask = np.zeros(self.num_envs, bool)
+            mask[ids] = True
+            return _select_rows(jnp.asarray(mask), fresh, state)
+        # a few environments: spawn and observe only those, in a sub-batch of one fixed size (padded)
+        rows = np.concatenate([ids, np.full(few - len(ids), ids[0])])
+        spawn, k_obs = self.spawn(keys[jnp.asarray(rows)])
+        own = lambda x: np.asarray(x)[:len(ids)]
+        fields = self.env.native_model_fields(spawn.info, np.arange(len(ids)))
+        view = self.physics.load(ids, own(spawn.qpos), own(spawn.qvel), own(spawn.ctrl), fields)
+        fresh = self._first(as_view({k: v[rows] for k, v in view.items()}, np.zeros(few, bool)), spawn.info, k_obs)
+        return _scatter_rows(state, fresh, jnp.asarray(rows))
+
+    def load(self, state: State) -> State:
+        """Continue from a batched State of the task made by either engine (e.g. MJX's reset): its physical
+        state and randomisation go into the C engine; the returned State holds the native view."""
+        data = state.pipeline_state
+        ids = np.arange(self.num_envs)
+        fields = self.env.native_model_fields(state.info, ids)
+        view = self.physics.load(ids, np.asarray(data.qpos), np.asarray(data.qvel), np.asarray(data.ctrl), fields)
+        return state.replace(pipeline_state=as_view(view, np.zeros(self.num_envs, bool)))
+
+    def data(self, i: int) -> mujoco.MjData:
+        """Environment i's physics as a forward-computed MjData (for renderers and inspection)."""
+        data = self.physics.batch.get_data(i)
+        mujoco.mj_forward(self.physics.model, data)
+        return data
+
+    def controls(self, state: State, action: jax.Array, *args) -> jax.Array:
+        """The actuator controls the task's `prepare` gives for batched actions."""
+        return self._prepare(state, action, *args)[0]
+
+    def step(self, state: State, action: jax.Array, *args) -> State:
+        """One control step of every environment (the task's `prepare`, native physics, `transition`);
+        bodies the task's rules moved (info['teleported']) are written back to the engine."""
+        ctrl, actions = self._prepare(state, action, *args)
+        view, bad = self.physics.step(np.asarray(ctrl))
+        nxt = self._transition(state, as_view(view, bad), actions)
+        if "teleported" in nxt.info:
+            moved = np.flatnonzero(np.asarray(nxt.info["teleported"]))
+            if len(moved):
+                v = nxt.pipeline_state
+                self.physics.load(moved, np.asarray(v.qpos)[moved], np.asarray(v.qvel)[moved],
+                                  np.asarray(v.ctrl)[moved], fresh=False)
+        return nxt

@@ -22,7 +22,7 @@ def penalty_terms(scales, q, q_range, qd, last_qvel, dt, torque, action, last_ac
         "joint_acc": scales.joint_acc * jnp.sum(jnp.square((qd - last_qvel) / dt), -1),
         "torques": scales.torques * jnp.sum(jnp.square(torque), -1),
         "joint_limits": scales.joint_limits * limit,
-        "collisions": scales.collisions * collisions,
+        "collisions": scales.collisions * jnp.asarray(collisions, jnp.float32),
         "action_rate": scales.action_rate * jnp.sum(jnp.square(action - last_action), -1),
     }
 

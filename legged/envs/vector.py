@@ -11,6 +11,7 @@ import dataclasses
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from brax.envs.base import State
 
 
@@ -52,26 +53,60 @@ def select_envs(mask, on_true, on_false):
     return jax.tree_util.tree_map(pick, on_true, on_false)
 
 
-class VectorEnv:
-    """`num_envs` copies of `env` with jitted batched reset and auto-resetting step.
+def account(sums: dict, nxt: State) -> tuple[dict, dict, jax.Array, jax.Array]:
+    """Episode bookkeeping of one vector step: (running sums with finished episodes cleared, `finished`
+    statistics, done, time_out) from the sums before the step and the stepped states `nxt`."""
+    done = nxt.done > 0
+    sums = dict(sums)
+    sums["return"] = sums["return"] + nxt.reward
+    sums["length"] = sums["length"] + 1.0
+    for k in sums:
+        if k.startswith("reward/"):
+            sums[k] = sums[k] + nxt.metrics[k]
+    finished = {k: jnp.where(done, v, 0.0) for k, v in sums.items()}
+    finished.update({k: jnp.where(done, v, 0.0) for k, v in nxt.metrics.items() if not k.startswith("reward/")})
+    sums = {k: jnp.where(done, 0.0, v) for k, v in sums.items()}
+    return sums, finished, done, done & (nxt.info["truncation"] > 0)
 
-    Build it with `VectorEnv.of(env, num_envs)` to reuse the compiled functions of an earlier one.
+
+PHYSICS = ("mjx", "native")
+"""Physics engines every task runs on."""
+
+
+class VectorEnv:
+    """`num_envs` copies of `env` with batched reset and auto-resetting step, on either physics engine.
+
+    physics="mjx": everything jitted in JAX (`env.reset`/`env.step` vmapped). physics="native": MuJoCo's C
+    engine (legged.envs.native) steps the physics on `threads` threads, the same task verbs in JAX do the
+    rest. Build it with `VectorEnv.of(env, num_envs, ...)` to reuse the compiled functions of an earlier one.
     """
 
-    def __init__(self, env, num_envs: int):
+    def __init__(self, env, num_envs: int, physics: str = "mjx", threads: int | None = None):
         if num_envs < 1:
             raise ValueError(f"num_envs must be >= 1, got {num_envs}")
-        self.env, self.num_envs = env, num_envs
-        self.reset = jax.jit(self._reset)
-        self.step = jax.jit(self._step)
+        if physics not in PHYSICS:
+            raise ValueError(f"unknown physics {physics!r}; one of {', '.join(PHYSICS)}")
+        self.env, self.num_envs, self.physics = env, num_envs, physics
+        self._zero = jax.jit(self._zero_sums)
+        self._account = jax.jit(account)
+        if physics == "native":
+            from legged.envs.native import NativeEnvs
+
+            self.native = NativeEnvs(env, num_envs, threads)
+            self.reset, self.step = self._native_reset, self._native_step
+        else:
+            self.reset = jax.jit(self._reset)
+            self.step = jax.jit(self._step)
 
     @classmethod
-    def of(cls, env, num_envs: int) -> "VectorEnv":
-        """The VectorEnv of (env, num_envs), made once per environment object (compilation is slow)."""
+    def of(cls, env, num_envs: int, physics: str = "mjx", threads: int | None = None) -> "VectorEnv":
+        """The VectorEnv of (env, num_envs, physics), made once per environment object (compilation is
+        slow); a native one is made anew when `threads` differs."""
         cache = env.__dict__.setdefault("_vector_envs", {})
-        if num_envs not in cache:
-            cache[num_envs] = cls(env, num_envs)
-        return cache[num_envs]
+        key = (num_envs, physics, threads if physics == "native" else None)
+        if key not in cache:
+            cache[key] = cls(env, num_envs, physics, threads)
+        return cache[key]
 
     def _zero_sums(self, state: State) -> dict:
         sums = {k: jnp.zeros(self.num_envs) for k in state.metrics if k.startswith("reward/")}
@@ -86,19 +121,26 @@ class VectorEnv:
     def _step(self, batch: Batch, action: jax.Array, *env_args) -> tuple[Batch, StepResult]:
         """Step every environment; `env_args` (e.g. a soccer opponent) go to every env's step unbatched."""
         nxt = jax.vmap(lambda s, a: self.env.step(s, a, *env_args))(batch.state, action)
-        done = nxt.done > 0
-        sums = dict(batch.sums)
-        sums["return"] = sums["return"] + nxt.reward
-        sums["length"] = sums["length"] + 1.0
-        for k in sums:
-            if k.startswith("reward/"):
-                sums[k] = sums[k] + nxt.metrics[k]
-        finished = {k: jnp.where(done, v, 0.0) for k, v in sums.items()}
-        finished.update({k: jnp.where(done, v, 0.0) for k, v in nxt.metrics.items() if not k.startswith("reward/")})
+        sums, finished, done, time_out = account(batch.sums, nxt)
         split = jax.vmap(jax.random.split)(batch.keys)
         fresh = jax.lax.cond(done.any(), lambda: jax.vmap(self.env.reset)(split[:, 0]), lambda: nxt)
         state = select_envs(done, fresh, nxt)
-        sums = {k: jnp.where(done, 0.0, v) for k, v in sums.items()}
-        result = StepResult(obs=state.obs, reward=nxt.reward, done=done,
-                            time_out=done & (nxt.info["truncation"] > 0), finished=finished)
+        result = StepResult(obs=state.obs, reward=nxt.reward, done=done, time_out=time_out, finished=finished)
         return Batch(state=state, keys=split[:, 1], sums=sums), result
+
+    def _native_reset(self, key: jax.Array) -> Batch:
+        keys = jax.random.split(key, self.num_envs + 1)
+        state = self.native.reset(keys[1:])
+        return Batch(state=state, keys=jax.random.split(keys[0], self.num_envs), sums=self._zero(state))
+
+    def _native_step(self, batch: Batch, action: jax.Array, *env_args) -> tuple[Batch, StepResult]:
+        nxt = self.native.step(batch.state, action, *env_args)
+        sums, finished, done, time_out = self._account(batch.sums, nxt)
+        split = _split_keys(batch.keys)
+        ended = np.flatnonzero(np.asarray(done))
+        state = self.native.reset(split[:, 0], ended, nxt) if len(ended) else nxt
+        result = StepResult(obs=state.obs, reward=nxt.reward, done=done, time_out=time_out, finished=finished)
+        return Batch(state=state, keys=split[:, 1], sums=sums), result
+
+
+_split_keys = jax.jit(jax.vmap(jax.random.split))

@@ -11,7 +11,8 @@ plus the game in the agent's heading frame; proprioception only in vision mode),
 The game: a goal scores +-1 and play restarts from the kick-off poses (or the episode ends, with
 `end_on_goal`); a ball over a line outside a goal is put back at rest just inside that line; a robot
 falls when its torso is low or tilted (`end_on_fall` says whose fall ends the episode); the time limit is a
-truncation. `transition` is shared by MJX stepping and native MuJoCo stepping (legged.soccer.native).
+truncation. The engine verbs (legged.envs.physics) are shared by MJX stepping and native MuJoCo stepping
+(legged.envs.native); a restart moves bodies in the view and sets `info['teleported']`.
 """
 
 from __future__ import annotations
@@ -22,7 +23,8 @@ import numpy as np
 from brax.envs.base import State
 from mujoco import mjx
 
-from legged.envs.api import MjxEnv, reject_divergence
+from legged.envs.api import MjxEnv
+from legged.envs.physics import PhysicsView, Spawn
 from legged.robots.op3 import OP3
 from legged.robots.spec import RobotSpec
 from legged.sensors.raycam import render
@@ -58,28 +60,36 @@ class SoccerEnv(MjxEnv):
         self._q_range = jnp.asarray(m.jnt_range[joint_ids], jnp.float32)  # [A, J, 2]
         self._ball_radius = float(config.scene.ball_radius)
         self.camera = soccer_camera(m, config.camera, layout) if config.vision else None
-        self._metric_shapes = None
 
-    # ----------------------------------------------------------------- Brax Env API (dt, sizes: MjxEnv)
-    def reset(self, rng: jax.Array) -> State:
+    # ----------------------------------------------------------------- engine verbs (reset, step: MjxEnv)
+    def spawn(self, rng: jax.Array) -> Spawn:
         """A new game: robots around their kick-off spots, the ball on the pitch (see SoccerConfig)."""
-        rng, k_start, k_noise = jax.random.split(rng, 3)
+        rng, k_start = jax.random.split(rng)
         qpos, qvel = self.start_state(k_start)
-        data = self._pose(mjx.make_data(self.mjx_model).replace(qpos=qpos, qvel=qvel, ctrl=self._ctrl0))
-        info = self._initial_info(rng)
-        obs = self._observe(data, info, k_noise)
-        metrics = {k: jnp.zeros(s.shape, s.dtype) for k, s in self._metrics_structure().items()}
-        return State(data, obs, jnp.zeros(self.n_agents), jnp.float32(0.0), metrics, info)
+        return Spawn(qpos=qpos, qvel=qvel, ctrl=self._ctrl0, info=self._initial_info(rng))
 
     def start_state(self, rng: jax.Array):
-        """qpos, qvel of a new game (rules.start_state); `reset(key)` uses the second of split(key, 3)."""
+        """qpos, qvel of a new game (rules.start_state); `spawn(key)` uses the second of split(key)."""
         return rules.start_state(rng, self.config, self._qpos0, self._kickoff, self.layout,
                                  self.robot.standing_height, self.mj_model.nv)
 
-    def step(self, state: State, action: jax.Array) -> State:
-        """One control step of every robot; `action` is [n_agents, action_size]."""
-        data = self.physics_step(state.pipeline_state, action)
-        return self.transition(state, data, action)
+    def first_state(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
+        obs = self._observe(view, info, rng)
+        metrics = self.zero_metrics(view, info, info["last_action"])
+        return State(view, obs, jnp.zeros(self.n_agents), jnp.float32(0.0), metrics, info)
+
+    def prepare(self, state: State, action: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """PD targets of every actuator for actions [n_agents, action_size]."""
+        return self.joint_targets(action), action
+
+    @property
+    def uses_cameras(self) -> bool:
+        return self.camera is not None
+
+    def mjx_settle(self, model, data):
+        """Body, geom and camera poses only: the observations and the camera need no more, and the next
+        mjx.step computes the rest."""
+        return mjx.camlight(model, mjx.kinematics(model, data))
 
     # ----------------------------------------------------------------- physics
     def joint_targets(self, action: jax.Array) -> jax.Array:
@@ -89,16 +99,14 @@ class SoccerEnv(MjxEnv):
         target = jnp.clip(target, self._ctrl_range[..., 0], self._ctrl_range[..., 1])
         return self._ctrl0.at[self.layout.actuator_ids].set(target)
 
-    def physics_step(self, data, action: jax.Array):
-        """Advance MJX physics by one control period with the actions' PD targets."""
-        data = data.replace(ctrl=self.joint_targets(action))
-        return jax.lax.scan(lambda d, _: (mjx.step(self.mjx_model, d), None), data, None, length=self.n_substeps)[0]
-
     # ----------------------------------------------------------------- the game
-    def transition(self, state: State, data, action: jax.Array) -> State:
-        """Next State from stepped physics `data` (MJX or native): rules, rewards, restarts, observations."""
+    def transition(self, state: State, data: PhysicsView, action: jax.Array) -> State:
+        """Next State from the view of stepped physics (MJX or native): rules, rewards, restarts, observations.
+
+        After a restart the camera image is rendered from the poses before it (one control step late, in
+        both engines): the kinematics of the moved bodies are the engine's to compute."""
         c = self.config
-        bad, data = reject_divergence(data, state.pipeline_state, c.divergence_qvel)
+        bad = data.diverged
         action = jnp.where(bad, 0.0, action)
         info = dict(state.info)
         info["rng"], k_noise = jax.random.split(info["rng"])
@@ -121,7 +129,7 @@ class SoccerEnv(MjxEnv):
         ended = bad | ends_it | (c.end_on_goal & call.goal)
         done = ended | time_out
         info["truncation"] = (time_out & ~ended).astype(jnp.float32)
-        data = self._restart(data, call, done)
+        data, info["teleported"] = self._restart(data, call, done)
 
         metrics = {f"reward/{k}": v for k, v in terms.items()}
         score = info["score"].astype(jnp.float32)
@@ -133,8 +141,9 @@ class SoccerEnv(MjxEnv):
         return state.replace(pipeline_state=data, obs=obs, reward=reward.astype(jnp.float32),
                              done=done.astype(jnp.float32), metrics=metrics, info=info)
 
-    def _restart(self, data, call: rules.BallCall, done):
-        """Kick-off after a goal, ball back in play after it left the pitch (not when the episode ends)."""
+    def _restart(self, data: PhysicsView, call: rules.BallCall, done) -> tuple[PhysicsView, jax.Array]:
+        """Kick-off after a goal, ball back in play after it left the pitch (not when the episode ends); the
+        view with the bodies moved, and whether any moved."""
         c, lay = self.config, self.layout
         goal = call.goal & ~done
         out = call.out & ~done
@@ -147,14 +156,7 @@ class SoccerEnv(MjxEnv):
         moved = goal | out
         data = data.replace(qpos=jnp.where(moved, placed_q, qpos), qvel=jnp.where(moved, placed_v, qvel),
                             ctrl=jnp.where(goal, self._ctrl0, data.ctrl))
-        if self.camera is None:
-            return data  # observations read qpos/qvel; the next mjx.step recomputes the kinematics
-        return jax.lax.cond(moved, self._pose, lambda d: d, data)
-
-    def _pose(self, data):
-        """Body, geom and camera poses for data's qpos (kinematics only: the observations and the camera
-        need no more; the next mjx.step computes the rest)."""
-        return mjx.camlight(self.mjx_model, mjx.kinematics(self.mjx_model, data))
+        return data, moved
 
     # ----------------------------------------------------------------- observations
     def _observe(self, data, info: dict, rng) -> dict:
@@ -187,14 +189,5 @@ class SoccerEnv(MjxEnv):
         """Episode bookkeeping at the start of a game."""
         zeros = jnp.zeros((self.n_agents, self.action_size))
         return dict(rng=rng, step=jnp.int32(0), last_action=zeros, last_qvel=zeros, score=jnp.zeros(2, jnp.int32),
-                    fallen=jnp.zeros(self.n_agents, bool), out_of_play=jnp.int32(0), truncation=jnp.float32(0.0))
-
-    def _metrics_structure(self) -> dict:
-        """Shapes of `State.metrics` (traced once, without compiling)."""
-        if self._metric_shapes is None:
-            def probe(rng):
-                data = mjx.make_data(self.mjx_model).replace(qpos=self._qpos0)
-                state = State(data, {}, jnp.zeros(self.n_agents), jnp.float32(0.0), {}, self._initial_info(rng))
-                return self.transition(state, data, jnp.zeros((self.n_agents, self.action_size))).metrics
-            self._metric_shapes = jax.eval_shape(probe, jax.random.PRNGKey(0))
-        return self._metric_shapes
+                    fallen=jnp.zeros(self.n_agents, bool), out_of_play=jnp.int32(0), truncation=jnp.float32(0.0),
+                    teleported=jnp.bool_(False))

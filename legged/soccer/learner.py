@@ -13,6 +13,7 @@ import jax.numpy as jnp
 from brax.envs.base import State
 
 from legged.envs.api import MjxEnv
+from legged.envs.physics import PhysicsView, Spawn
 from legged.sensors.raycam import render
 from legged.soccer.env import SoccerEnv
 from legged.soccer.opponents import Opponent, OpponentNet, opponent_actions, scripted_opponent
@@ -23,11 +24,13 @@ LEARNER = 0
 
 
 class LearnerView(MjxEnv):
-    """Agent 0 of `game` as a Brax-style single-agent environment; `step(state, action, opponent=None)`."""
+    """Agent 0 of `game` as a Brax-style single-agent environment; `step(state, action, opponent=None)`
+    (the opponent drives every other robot; None: the script)."""
 
     def __init__(self, game: SoccerEnv, net: OpponentNet = OpponentNet(), hidden: tuple[int, ...] = ()):
         self.game, self.net = game, net
-        self.config, self.mj_model, self.robot = game.config, game.mj_model, game.robot
+        self.config, self.robot = game.config, game.robot
+        self.mj_model, self.mjx_model = game.mj_model, game.mjx_model
         self.default_opponent = scripted_opponent(game.policy_state_size, game.action_size, hidden)
         self._camera = None
 
@@ -38,18 +41,32 @@ class LearnerView(MjxEnv):
             self._camera = soccer_camera(self.mj_model, self.config.camera, self.game.layout)
         return render(self._camera, data)["rgb"][LEARNER]
 
-    def reset(self, rng: jax.Array) -> State:
-        return self._view(self.game.reset(rng))
+    # ----------------------------------------------------------------- engine verbs (reset, step: MjxEnv)
+    def spawn(self, rng: jax.Array) -> Spawn:
+        return self.game.spawn(rng)
 
-    def step(self, state: State, action: jax.Array, opponent: Opponent | None = None) -> State:
+    def first_state(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
+        return self._view(self.game.first_state(view, info, rng))
+
+    def prepare(self, state: State, action: jax.Array, opponent: Opponent | None = None):
+        """Controls of every robot: the learner's action, the others' from `opponent` (default: the script)."""
         opponent = self.default_opponent if opponent is None else opponent
+        others = state.info["game_obs"]["privileged_state"][LEARNER + 1:, :self.game.policy_state_size]
+        actions = jnp.concatenate([action[None], opponent_actions(self.net, opponent, others, self.robot.action_scale)])
+        return self.game.joint_targets(actions), actions
+
+    def transition(self, state: State, view: PhysicsView, actions: jax.Array) -> State:
         info = dict(state.info)
         game_obs = info.pop("game_obs")
-        others = game_obs["privileged_state"][LEARNER + 1:, :self.game.policy_state_size]
-        actions = jnp.concatenate([action[None], opponent_actions(self.net, opponent, others,
-                                                                  self.robot.action_scale)])
-        game = State(state.pipeline_state, game_obs, jnp.zeros(self.game.n_agents), state.done, {}, info)
-        return self._view(self.game.step(game, actions))
+        game = State(view, game_obs, jnp.zeros(self.game.n_agents), state.done, {}, info)
+        return self._view(self.game.transition(game, view, actions))
+
+    @property
+    def uses_cameras(self) -> bool:
+        return self.game.uses_cameras
+
+    def mjx_settle(self, model, data):
+        return self.game.mjx_settle(model, data)
 
     def _view(self, game: State) -> State:
         """Agent 0's share of a game State (the whole game's observations kept in info for the others)."""

@@ -9,18 +9,20 @@
 
 Agents are named after their robots ('home0', 'away0', ...). Each observation is the agent's `state`
 vector (state tasks) or a dict with `state` and `camera` (vision task); the ground truth is in
-`infos[agent]['privileged_state']` and the whole game in `state()`. Physics, rules and rewards are those
-of the MJX environment (legged.soccer.native).
+`infos[agent]['privileged_state']` and the whole game in `state()`. Physics is native MuJoCo (the batched
+engine of legged.envs.native, one game); rules, rewards and observations are the task's own.
 """
 
 from __future__ import annotations
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from legged.envs import make
-from legged.soccer.native import NativeSoccer
+from legged.tasks import make
+from legged.envs.native import NativeEnvs
 
 
 class SoccerParallelEnv(ParallelEnv):
@@ -30,7 +32,9 @@ class SoccerParallelEnv(ParallelEnv):
 
     def __init__(self, task: str = "soccer-1v1", config=None):
         env = make(task, config)
-        self.runner = NativeSoccer(env)
+        self.env, self.runner = env, NativeEnvs(env, 1)
+        self.game = None
+        """The game's State (a batch of one)."""
         self.possible_agents = [p.rstrip("/") for p in env.layout.prefixes]
         self.agents: list[str] = []
         self._seed = 0
@@ -51,7 +55,8 @@ class SoccerParallelEnv(ParallelEnv):
     def reset(self, seed: int | None = None, options: dict | None = None):
         if seed is not None:
             self._seed = int(seed)
-        state = self.runner.reset(self._seed)
+        self.game = self.runner.reset(jax.random.PRNGKey(self._seed)[None])
+        state = self._one()
         self._seed += 1  # the next reset without a seed starts another game
         self.agents = list(self.possible_agents)
         return self._observations(state), self._infos(state)
@@ -62,7 +67,11 @@ class SoccerParallelEnv(ParallelEnv):
         missing = [a for a in self.agents if a not in actions]
         if missing:
             raise KeyError(f"no action for agent(s) {missing}")
-        state = self.runner.step(np.stack([np.asarray(actions[a], np.float32) for a in self.possible_agents]))
+        acts = np.stack([np.asarray(actions[a], np.float32) for a in self.possible_agents])
+        if acts.shape != (self.env.n_agents, self.env.action_size):
+            raise ValueError(f"each action must have shape ({self.env.action_size},), got {acts.shape[1:]}")
+        self.game = self.runner.step(self.game, jnp.asarray(acts)[None])
+        state = self._one()
         obs, infos = self._observations(state), self._infos(state)
         reward = np.asarray(state.reward)
         rewards = {a: float(reward[i]) for i, a in enumerate(self.possible_agents)}
@@ -76,7 +85,11 @@ class SoccerParallelEnv(ParallelEnv):
 
     def state(self) -> np.ndarray:
         """The whole game: every agent's privileged observation, concatenated."""
-        return np.asarray(self.runner.state.obs["privileged_state"]).reshape(-1)
+        return np.asarray(self._one().obs["privileged_state"]).reshape(-1)
+
+    def _one(self):
+        """The game's State without its batch axis."""
+        return jax.tree_util.tree_map(lambda x: x[0], self.game)
 
     def _observations(self, state) -> dict:
         obs = {k: np.asarray(v) for k, v in state.obs.items()}

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from legged.worlds.maps import HeightMaps
+
 
 class WorldError(ValueError):
     """A world file or world configuration is unusable; the message says why."""
@@ -81,18 +83,15 @@ class WorldConfig:
             raise WorldError(f"endpoint_fraction must be in (0, 0.5), got {self.endpoint_fraction}")
 
 
-@dataclasses.dataclass(frozen=True)
-class World:
-    """A confined world as data: height maps (world frame, row index along x) plus metadata."""
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class World(HeightMaps):
+    """A confined world as data: its height maps (floor, ceiling, resolution, origin; world frame, row index
+    along x; the ceiling equals the floor inside solid walls) plus start, goal and where it came from."""
 
-    floor: np.ndarray
-    """Floor height z (metres), shape (nx, ny); sample [i, j] lies at origin + (i, j) * resolution."""
-    ceiling: np.ndarray
-    """Ceiling height z (metres), same shape; equal to the floor inside solid walls."""
-    resolution: float
-    """Spacing of samples, metres."""
-    origin: np.ndarray
-    """World x, y of sample [0, 0]."""
+    ceiling_anti_diagonal: bool = True
+    """The ceiling is realised as an upside-down MuJoCo height field."""
+    source: str = "generated world"
+    """Where the maps came from (for messages)."""
     start: np.ndarray
     """Start position of the body centre (x, y, z)."""
     goal: np.ndarray

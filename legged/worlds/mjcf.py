@@ -62,8 +62,15 @@ def _add_hfield(asset, worldbody, name, heights, centre, top_z, flipped, rgba, r
     ET.SubElement(worldbody, "geom", **attrs)
 
 
-def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions()) -> str:
-    """Standalone MJCF text: the robot file with the terrain and contact pairs added."""
+CONTACT_SLOTS = 16
+"""Contacts per watched geom that its contact sensor reports (the deepest ones): the sum of their normal
+forces is exact while a geom has at most this many (Go1 on the confined height fields: at most 7 seen)."""
+
+
+def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions(),
+              contact_sensors: tuple[str, ...] = ()) -> str:
+    """Standalone MJCF text: the robot file with the terrain and contact pairs added, and a contact sensor
+    (forces of the CONTACT_SLOTS deepest contacts, each normal first) on every geom of `contact_sensors`."""
     if not robot.mjcf_path.is_file():
         raise FileNotFoundError(f"robot model not found: {robot.mjcf_path} (reinstall the package assets)")
     root = ET.parse(robot.mjcf_path).getroot()
@@ -97,13 +104,20 @@ def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneO
     friction = f"{options.friction} {options.friction} 0.005 0.0001 0.0001"
     for geom, surface in pairs:
         ET.SubElement(contact, "pair", geom1=geom, geom2=surface, condim="3", friction=friction)
+    if contact_sensors:
+        sensor = root.find("sensor") if root.find("sensor") is not None else ET.SubElement(root, "sensor")
+        for geom in contact_sensors:
+            ET.SubElement(sensor, "contact", name=f"contact_{geom}", geom1=geom, data="force", reduce="mindist",
+                          num=str(CONTACT_SLOTS))
     ET.indent(root)
     return ET.tostring(root, encoding="unicode")
 
 
-def compile_scene(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions()) -> mujoco.MjModel:
-    """Compiled MjModel of the scene (the one source of truth for MJX, native MuJoCo and viewers)."""
-    return mujoco.MjModel.from_xml_string(scene_xml(terrain, robot, options))
+def compile_scene(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions(),
+                  contact_sensors: tuple[str, ...] = ()) -> mujoco.MjModel:
+    """Compiled MjModel of the scene (the one source of truth for MJX, native MuJoCo and viewers); the native
+    engine's copy adds `contact_sensors` (read-outs only: the physics is the same)."""
+    return mujoco.MjModel.from_xml_string(scene_xml(terrain, robot, options, contact_sensors))
 
 
 def write_world(world, robot: RobotSpec, out_dir) -> dict:

@@ -8,20 +8,17 @@ import math
 import numpy as np
 
 from legged.worlds.generator import World, WorldConfig, WorldError, generate_world
+from legged.worlds.maps import HeightMaps
 
 
-@dataclasses.dataclass(frozen=True)
-class Terrain:
-    """Floor and ceiling maps holding one or more worlds side by side, plus each world's start and goal."""
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Terrain(HeightMaps):
+    """Height maps holding one or more worlds side by side, plus each world's start and goal."""
 
-    floor: np.ndarray
-    """Floor height z, shape (nx, ny), row index along x."""
-    ceiling: np.ndarray
-    """Ceiling height z, same shape."""
-    resolution: float
-    """Spacing of samples, metres."""
-    origin: np.ndarray
-    """World x, y of sample [0, 0]."""
+    ceiling_anti_diagonal: bool = True
+    """The ceiling is realised as an upside-down MuJoCo height field."""
+    source: str = "terrain"
+    """Where the maps came from (for messages)."""
     starts: np.ndarray
     """Start of each tile's world, shape (n_tiles, 3)."""
     goals: np.ndarray

@@ -1,4 +1,7 @@
-"""Floor and ceiling height maps as the planner sees them (from a generated world or a sampled scene)."""
+"""Floor and ceiling height maps over one grid: the one height-map type of the project.
+
+A generated `World` and a tiled `Terrain` are HeightMaps with more fields; the planner reads any of them,
+or maps sampled from an MJCF scene (planners.scene_maps)."""
 
 from __future__ import annotations
 
@@ -35,11 +38,11 @@ class HeightMaps:
             raise ValueError(f"resolution must be > 0, got {self.resolution}")
 
     @classmethod
-    def from_world(cls, world) -> "HeightMaps":
-        """The exact maps of a generated world (or a Terrain): what its MJCF height fields realise."""
-        return cls(floor=np.asarray(world.floor, np.float64), ceiling=np.asarray(world.ceiling, np.float64),
-                   resolution=float(world.resolution), origin=np.asarray(world.origin, np.float64),
-                   ceiling_anti_diagonal=True, source="generated world")
+    def from_world(cls, world: "HeightMaps") -> "HeightMaps":
+        """Just the maps of a World or Terrain (float64 copies of what its MJCF height fields realise)."""
+        return HeightMaps(floor=np.asarray(world.floor, np.float64), ceiling=np.asarray(world.ceiling, np.float64),
+                          resolution=float(world.resolution), origin=np.asarray(world.origin, np.float64),
+                          ceiling_anti_diagonal=world.ceiling_anti_diagonal, source=world.source)
 
     @property
     def upper(self) -> np.ndarray:

@@ -1,0 +1,110 @@
+"""The task registry, the top of the core (legged.envs and legged.soccer sit below it): what each task is,
+so that nothing else has to ask `isinstance`.
+
+`make("confined-waypoints")` builds a task's environment; `task_entry(name)` says what it is (robot, kind,
+physics engines and trainers it supports, whether its actor sees a camera); `learner_env(entry, env)` is
+the single-agent environment trainers and evaluators step (soccer: agent 0's view of the game).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable, Literal
+
+from legged.envs.confined import ConfinedConfig, ConfinedEnv
+from legged.envs.flat import FlatConfig, FlatEnv
+from legged.robots import GO1, OP3
+from legged.robots.spec import RobotSpec
+from legged.soccer.config import SoccerSceneConfig
+from legged.soccer.task_config import SoccerConfig
+
+Kind = Literal["locomotion", "confined", "soccer"]
+
+
+def _soccer(config: SoccerConfig):
+    from legged.soccer.env import SoccerEnv  # imported on use (it builds the scene's MJX model)
+
+    return SoccerEnv(config)
+
+
+@dataclasses.dataclass(frozen=True)
+class TaskEntry:
+    """One registered task."""
+
+    name: str
+    """Task name (`legged tasks`)."""
+    factory: Callable
+    """Builds the environment from a config of the default's type."""
+    config: object
+    """Default environment config (a frozen dataclass)."""
+    robot: RobotSpec
+    """The robot it trains."""
+    kind: Kind
+    """locomotion (flat-ground velocity tracking), confined (worlds and planned waypoints: training needs the
+    planner, legged.envs never imports it) or soccer (multi-agent; trainers see agent 0's view)."""
+    physics: tuple[str, ...] = ("mjx", "native")
+    """Physics engines it runs on."""
+    backends: tuple[str, ...] = ("rsl", "brax")
+    """Trainers it supports."""
+    vision: bool = False
+    """Its actor reads camera images (a CNN; the rsl backend only)."""
+
+    def check(self, physics: str | None = None, backend: str | None = None) -> None:
+        """ValueError naming what to use instead when this task does not support `physics` or `backend`."""
+        if physics is not None and physics not in self.physics:
+            raise ValueError(f"{self.name} runs on physics {', '.join(self.physics)}, not {physics!r}")
+        if backend is not None and backend not in self.backends:
+            why = ": its actor reads camera images with a CNN, and the Brax backend builds MLPs only" if self.vision else ""
+            raise ValueError(f"{self.name} trains with --backend {' or '.join(self.backends)}, not {backend!r}{why}")
+
+
+TASKS: dict[str, TaskEntry] = {e.name: e for e in (
+    TaskEntry("go1-flat", FlatEnv, FlatConfig(), GO1, "locomotion"),
+    TaskEntry("confined-waypoints", ConfinedEnv, ConfinedConfig(mode="waypoints"), GO1, "confined"),
+    TaskEntry("confined-goal", ConfinedEnv, ConfinedConfig(mode="goal"), GO1, "confined"),
+    TaskEntry("confined-velocity", ConfinedEnv, ConfinedConfig(mode="velocity"), GO1, "confined"),
+    TaskEntry("confined-skills", ConfinedEnv, ConfinedConfig(mode="skills"), GO1, "confined"),
+    TaskEntry("soccer-1v1", _soccer, SoccerConfig(), OP3, "soccer"),
+    TaskEntry("soccer-2v2", _soccer, SoccerConfig(scene=SoccerSceneConfig(players_per_team=2)), OP3, "soccer"),
+    TaskEntry("soccer-1v1-vision", _soccer, SoccerConfig(vision=True), OP3, "soccer", backends=("rsl",), vision=True),
+)}
+"""Every task, by name."""
+
+
+class UnknownTaskError(KeyError):
+    """The task name is not registered."""
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+
+def task_entry(task: str) -> TaskEntry:
+    """The registry entry of a task; UnknownTaskError listing the known ones."""
+    if task not in TASKS:
+        raise UnknownTaskError(f"unknown task {task!r}; known tasks: {', '.join(sorted(TASKS))}")
+    return TASKS[task]
+
+
+def default_config(task: str):
+    """The default configuration of a task."""
+    return task_entry(task).config
+
+
+def make(task: str, config=None, **overrides):
+    """Build a task's environment; `overrides` replace fields of its (default) config."""
+    entry = task_entry(task)
+    config = config or entry.config
+    if overrides:
+        config = dataclasses.replace(config, **overrides)
+    return entry.factory(config)
+
+
+def learner_env(entry: TaskEntry, env, activation: str = "elu", hidden: tuple[int, ...] = ()):
+    """The single-agent environment trainers step: `env` itself, or for soccer agent 0's view of the game
+    (the other robots driven by opponents handed to each step; `activation` and `hidden` shape them)."""
+    if entry.kind != "soccer":
+        return env
+    from legged.soccer.learner import LearnerView
+    from legged.soccer.opponents import OpponentNet
+
+    return LearnerView(env, OpponentNet(activation), hidden)
