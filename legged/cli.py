@@ -6,34 +6,8 @@ import argparse
 import json
 import sys
 
-
-def _ints(minimum: int, maximum: int = 10**9):
-    """Parser of comma-separated integers in [minimum, maximum] (for argparse `type=`)."""
-
-    def parse(text: str) -> list[int]:
-        try:
-            values = [int(v) for v in text.split(",") if v.strip()]
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from None
-        if not values or min(values) < minimum or max(values) > maximum:
-            raise argparse.ArgumentTypeError(f"expected comma-separated integers from {minimum} to {maximum:,}, "
-                                             f"got {text!r}")
-        return values
-
-    return parse
-
-
-def _choices(*allowed: str):
-    """Parser of a comma-separated subset of `allowed` names (for argparse `type=`)."""
-
-    def parse(text: str) -> list[str]:
-        values = [v.strip() for v in text.split(",") if v.strip()]
-        unknown = [v for v in values if v not in allowed]
-        if not values or unknown:
-            raise argparse.ArgumentTypeError(f"choose from {', '.join(allowed)} (comma-separated), got {text!r}")
-        return values
-
-    return parse
+from legged.cli_args import (SEED, THREADS, Parser, bounded, choices, ints, join_negative_coordinates, task_names,
+                             xyz)
 
 
 def _print_records(records: list[dict], as_json: bool, print_table) -> int:
@@ -57,16 +31,6 @@ def cmd_world(args) -> int:
           f"min clearance={summary['min_clearance_m']} m\n  start={summary['start']} goal={summary['goal']}\n"
           f"  wrote {files['npz']} and {files['xml']}")
     return 0
-
-
-def _xyz(text: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected X,Y,Z in metres, got {text!r}") from None
-    if len(values) != 3 or not all(abs(v) < 1e6 for v in values):  # NaN fails here too
-        raise argparse.ArgumentTypeError(f"expected three finite comma-separated numbers X,Y,Z, got {text!r}")
-    return values
 
 
 def _planner_config(args):
@@ -137,11 +101,11 @@ def _add_planner_options(parser) -> None:
 
     parser.add_argument("--planner", default="rrtconnect",
                         help=f"OMPL planner: {', '.join(PLANNERS)} (RRT*, BIT* style names work too)")
-    parser.add_argument("--time-limit", type=_bounded_float(0.0, 3600.0), default=5.0,
+    parser.add_argument("--time-limit", type=bounded(float, 0.0, 3600.0), default=5.0,
                         help="seconds the planner may search")
-    parser.add_argument("--spacing", type=_bounded_float(0.01, 10.0), default=0.5,
+    parser.add_argument("--spacing", type=bounded(float, 0.01, 10.0), default=0.5,
                         help="largest distance between waypoints, m")
-    parser.add_argument("--planner-seed", type=_bounded_int(0, 2**31 - 1), default=0, help="seed of OMPL's sampling")
+    parser.add_argument("--planner-seed", type=SEED, default=0, help="seed of OMPL's sampling")
 
 
 def cmd_bench(args) -> int:
@@ -190,59 +154,8 @@ def cmd_bench_soccer(args) -> int:
 def _add_physics_options(parser, default: str = "mjx") -> None:
     parser.add_argument("--physics", choices=["mjx", "native"], default=default,
                         help="physics engine: mjx (JAX; for accelerators) or native (MuJoCo's C engine; fastest on a CPU)")
-    parser.add_argument("--threads", type=_positive_int, default=0, metavar="N",
+    parser.add_argument("--threads", type=THREADS, default=0, metavar="N",
                         help="CPU threads of native physics and torch (default: every core)")
-
-
-def _task_names(text: str) -> list[str]:
-    """Comma-separated registered task names (for argparse `type=`)."""
-    from legged.tasks import TASKS
-
-    names = [t.strip() for t in text.split(",") if t.strip()]
-    unknown = [t for t in names if t not in TASKS]
-    if not names or unknown:
-        raise argparse.ArgumentTypeError(f"unknown task(s) {unknown or text!r}; known: {', '.join(sorted(TASKS))}")
-    return names
-
-
-def _bounded_int(lo: int, hi: int):
-    """Parser of a whole number in [lo, hi] (for argparse `type=`): absurd values fail at once."""
-
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-        if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"must be between {lo:,} and {hi:,}, got {value:,}")
-        return value
-
-    return parse
-
-
-def _bounded_float(lo: float, hi: float):
-    """Parser of a finite number in (lo, hi] (for argparse `type=`)."""
-
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-        if not lo < value <= hi:  # NaN fails here too
-            raise argparse.ArgumentTypeError(f"must be greater than {lo:g} and at most {hi:g}, got {text}")
-        return value
-
-    return parse
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
 
 
 def cmd_train(args) -> int:
@@ -381,24 +294,16 @@ def cmd_view(args) -> int:
 def _add_server_options(parser, port: int = 8080) -> None:
     parser.add_argument("--host", default="127.0.0.1",
                         help="address to bind (default 127.0.0.1, this machine only; 0.0.0.0 exposes it)")
-    parser.add_argument("--port", type=_bounded_int(0, 65535), default=port, help="port to bind (0: any free port)")
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors: `legged <command>: error: <cause>` on stderr, exit code 2 (no usage
-    dump; `legged <command> --help` shows it)."""
-
-    def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message}\n")
+    parser.add_argument("--port", type=bounded(int, 0, 65535), default=port, help="port to bind (0: any free port)")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="legged", description="Legged-robot RL in MuJoCo/MJX.")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    p = Parser(prog="legged", description="Legged-robot RL in MuJoCo/MJX.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
 
     w = sub.add_parser("world", help="generate a confined world (world.npz + world.xml)")
-    w.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0)
-    w.add_argument("--difficulty", type=_bounded_int(0, 20), default=0, help="0/1/2 give 3/4/5 m tunnels; higher is longer")
+    w.add_argument("--seed", type=SEED, default=0)
+    w.add_argument("--difficulty", type=bounded(int, 0, 20), default=0, help="0/1/2 give 3/4/5 m tunnels; higher is longer")
     w.add_argument("--out", required=True, help="output directory")
     w.add_argument("--json", action="store_true", help="print a JSON summary")
     w.set_defaults(fn=cmd_world)
@@ -407,12 +312,12 @@ def build_parser() -> argparse.ArgumentParser:
     bsub = b.add_subparsers(dest="what", required=True)
     be = bsub.add_parser("env", help="environment steps per second on MJX and native MuJoCo, beside bare physics")
     be.add_argument("--task", default="confined-waypoints")
-    be.add_argument("--batch", type=_ints(1, 65536), default=[1, 64, 256], help="comma-separated batch sizes")
-    be.add_argument("--physics", type=_choices("mjx", "native", "rollout"), default=["mjx", "native", "rollout"],
+    be.add_argument("--batch", type=ints(1, 65536), default=[1, 64, 256], help="comma-separated batch sizes")
+    be.add_argument("--physics", type=choices("mjx", "native", "rollout"), default=["mjx", "native", "rollout"],
                     help="comma-separated: mjx, native (the task on each engine), rollout (bare native physics)")
-    be.add_argument("--threads", type=_positive_int, default=0, metavar="N",
+    be.add_argument("--threads", type=THREADS, default=0, metavar="N",
                     help="threads of native physics (default: every core)")
-    be.add_argument("--seconds", type=_bounded_float(0.0, 3600.0), default=3.0, help="timed seconds per batch size")
+    be.add_argument("--seconds", type=bounded(float, 0.0, 3600.0), default=3.0, help="timed seconds per batch size")
     be.add_argument("--peer-python", default=None,
                     help="python of the MuJoCo Playground peer (../shared/peers); adds ratio_vs_peer")
     be.add_argument("--peer-script", default=None,
@@ -422,47 +327,47 @@ def build_parser() -> argparse.ArgumentParser:
     be.set_defaults(fn=cmd_bench)
     sk = bsub.add_parser("soak", help="random and extreme actions under randomisation: non-finite values and "
                                       "divergences that reach the learner")
-    sk.add_argument("--tasks", type=_task_names, default=["confined-waypoints", "soccer-1v1"],
+    sk.add_argument("--tasks", type=task_names, default=["confined-waypoints", "soccer-1v1"],
                     help="comma-separated tasks")
-    sk.add_argument("--steps", type=_bounded_int(1, 10**9), default=1_000_000, help="env steps per task")
-    sk.add_argument("--batch", type=_bounded_int(1, 65536), default=256)
-    sk.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0)
+    sk.add_argument("--steps", type=bounded(int, 1, 10**9), default=1_000_000, help="env steps per task")
+    sk.add_argument("--batch", type=bounded(int, 1, 65536), default=256)
+    sk.add_argument("--seed", type=SEED, default=0)
     sk.add_argument("--physics", choices=["mjx", "native"], default="native")
-    sk.add_argument("--threads", type=_positive_int, default=0, metavar="N", help="native physics threads")
+    sk.add_argument("--threads", type=THREADS, default=0, metavar="N", help="native physics threads")
     sk.add_argument("--json", action="store_true")
     sk.add_argument("--quiet", action="store_true")
     sk.set_defaults(fn=cmd_bench_soak)
     bs = bsub.add_parser("soccer", help="soccer env steps per second (1v1, 2v2, with/without cameras) beside "
                                         "native MuJoCo and dm_control's soccer")
-    bs.add_argument("--team-sizes", type=_ints(1), default=[1, 2], help="players per team: 1 and/or 2")
+    bs.add_argument("--team-sizes", type=ints(1), default=[1, 2], help="players per team: 1 and/or 2")
     bs.add_argument("--camera", choices=("off", "on", "both"), default="both", help="head cameras rendered")
-    bs.add_argument("--batch", type=_ints(1, 65536), default=[1, 16, 64], help="comma-separated batch sizes")
-    bs.add_argument("--seconds", type=_bounded_float(0.0, 3600.0), default=3.0, help="timed seconds per measurement")
+    bs.add_argument("--batch", type=ints(1, 65536), default=[1, 16, 64], help="comma-separated batch sizes")
+    bs.add_argument("--seconds", type=bounded(float, 0.0, 3600.0), default=3.0, help="timed seconds per measurement")
     bs.add_argument("--no-peer", action="store_true", help="skip dm_control's soccer")
-    bs.add_argument("--peer-steps", type=_bounded_int(1, 100000), default=20, help="control steps timed per dm_control env")
-    bs.add_argument("--physics", type=_choices("mjx", "native"), default=["mjx", "native"],
+    bs.add_argument("--peer-steps", type=bounded(int, 1, 100000), default=20, help="control steps timed per dm_control env")
+    bs.add_argument("--physics", type=choices("mjx", "native"), default=["mjx", "native"],
                     help="comma-separated physics engines to measure")
-    bs.add_argument("--threads", type=_positive_int, default=0, metavar="N",
+    bs.add_argument("--threads", type=THREADS, default=0, metavar="N",
                     help="threads of native physics (default: every core)")
     bs.add_argument("--json", action="store_true", help="print a JSON list, one object per measurement")
     bs.add_argument("--quiet", action="store_true", help="no progress messages")
     bs.set_defaults(fn=cmd_bench_soccer)
     bp = bsub.add_parser("plan", help="planning time and path length per difficulty over generated worlds")
-    bp.add_argument("--difficulties", type=_ints(0, 20), default=[0, 1, 2], help="comma-separated levels")
-    bp.add_argument("--worlds", type=_bounded_int(1, 10000), default=20, help="worlds per difficulty (seeds first-seed onward)")
-    bp.add_argument("--first-seed", type=_bounded_int(0, 2**31 - 1), default=0)
+    bp.add_argument("--difficulties", type=ints(0, 20), default=[0, 1, 2], help="comma-separated levels")
+    bp.add_argument("--worlds", type=bounded(int, 1, 10000), default=20, help="worlds per difficulty (seeds first-seed onward)")
+    bp.add_argument("--first-seed", type=SEED, default=0)
     _add_planner_options(bp)
     bp.add_argument("--json", action="store_true", help="print a JSON list, one object per difficulty")
     bp.add_argument("--quiet", action="store_true", help="no progress bars")
     bp.set_defaults(fn=cmd_bench_plan)
 
     pl = sub.add_parser("plan", help="plan body-pose waypoints through a generated world or an MJCF scene")
-    pl.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0, help="seed of the generated world")
-    pl.add_argument("--difficulty", type=_bounded_int(0, 20), default=0)
+    pl.add_argument("--seed", type=SEED, default=0, help="seed of the generated world")
+    pl.add_argument("--difficulty", type=bounded(int, 0, 20), default=0)
     pl.add_argument("--scene", default=None, help="plan through this MJCF scene instead (needs --start, --goal)")
-    pl.add_argument("--start", type=_xyz, default=None, help="body centre X,Y,Z (default: the world's start)")
-    pl.add_argument("--goal", type=_xyz, default=None, help="body centre X,Y,Z (default: the world's goal)")
-    pl.add_argument("--resolution", type=_bounded_float(0.005, 1.0), default=0.05, help="map resolution when sampling --scene, m")
+    pl.add_argument("--start", type=xyz, default=None, help="body centre X,Y,Z (default: the world's start)")
+    pl.add_argument("--goal", type=xyz, default=None, help="body centre X,Y,Z (default: the world's goal)")
+    pl.add_argument("--resolution", type=bounded(float, 0.005, 1.0), default=0.05, help="map resolution when sampling --scene, m")
     _add_planner_options(pl)
     pl.add_argument("--json", action="store_true",
                     help="print one JSON object: waypoints [x, y, z, roll, pitch, yaw], length_m, plan_time_s, planner")
@@ -471,9 +376,9 @@ def build_parser() -> argparse.ArgumentParser:
     tr = sub.add_parser("train", help="train a policy (Brax PPO or rsl-rl PPO) into a run directory")
     tr.add_argument("task", nargs="?", help="task name (legged tasks)")
     tr.add_argument("--backend", choices=["rsl", "brax"], default="rsl")
-    tr.add_argument("--num-envs", type=_bounded_int(1, 2**20), default=256)
-    tr.add_argument("--timesteps", type=_bounded_int(1, 10**12), default=1_000_000, help="environment steps, all envs together")
-    tr.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0)
+    tr.add_argument("--num-envs", type=bounded(int, 1, 2**20), default=256)
+    tr.add_argument("--timesteps", type=bounded(int, 1, 10**12), default=1_000_000, help="environment steps, all envs together")
+    tr.add_argument("--seed", type=SEED, default=0)
     _add_physics_options(tr)
     tr.add_argument("--run-dir", default=None, help="where the run is written (default runs/<task>-<time>)")
     tr.add_argument("--set", action="append", default=[], metavar="PATH=VALUE",
@@ -486,10 +391,10 @@ def build_parser() -> argparse.ArgumentParser:
     ev = sub.add_parser("eval", help="evaluate a run's policy on held-out worlds (MJX or native MuJoCo)")
     ev.add_argument("run_dir")
     ev.add_argument("--checkpoint", default=None, help="a checkpoint file (default: the run's newest)")
-    ev.add_argument("--episodes", type=_bounded_int(1, 100000), default=32)
-    ev.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=12345, help="seed of the evaluation episodes")
+    ev.add_argument("--episodes", type=bounded(int, 1, 100000), default=32)
+    ev.add_argument("--seed", type=SEED, default=12345, help="seed of the evaluation episodes")
     _add_physics_options(ev)
-    ev.add_argument("--num-envs", type=_bounded_int(1, 4096), default=16, help="episodes run side by side")
+    ev.add_argument("--num-envs", type=bounded(int, 1, 4096), default=16, help="episodes run side by side")
     ev.add_argument("--json", action="store_true", help="one-line JSON")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
     ev.set_defaults(fn=cmd_eval)
@@ -519,7 +424,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser("camera", help="each soccer player's head camera: the JAX ray renderer beside MuJoCo's")
     c.add_argument("--task", default="soccer-1v1-vision", help="soccer-1v1, soccer-2v2 or soccer-1v1-vision")
-    c.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0, help="game state: 0 is the kick-off, others move robots and ball")
+    c.add_argument("--seed", type=SEED, default=0, help="game state: 0 is the kick-off, others move robots and ball")
     c.add_argument("--out", default="camera", help="folder for agent<i>_ray.png and agent<i>_native.png")
     c.add_argument("--json", action="store_true", help="print the agreement figures as JSON")
     c.set_defaults(fn=cmd_camera)
@@ -530,10 +435,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     d = sub.add_parser("demo", help="generate a world and run Go1 in it (MJX and native MuJoCo)")
     d.add_argument("--out", default="legged-demo", help="where to write the world files")
-    d.add_argument("--seconds", type=_bounded_float(0.0, 3600.0), default=4.0, help="simulated seconds")
-    d.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0)
-    d.add_argument("--difficulty", type=_bounded_int(0, 20), default=1)
-    d.add_argument("--physics", type=_choices("mjx", "native"), default=["mjx", "native"],
+    d.add_argument("--seconds", type=bounded(float, 0.0, 3600.0), default=4.0, help="simulated seconds")
+    d.add_argument("--seed", type=SEED, default=0)
+    d.add_argument("--difficulty", type=bounded(int, 0, 20), default=1)
+    d.add_argument("--physics", type=choices("mjx", "native"), default=["mjx", "native"],
                    help="comma-separated physics engines to step side by side (default both, with their qpos gap)")
     d.add_argument("--view", action="store_true", help="afterwards, serve the dashboard on the demo's world")
     _add_server_options(d)
@@ -545,11 +450,11 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--task", default=None, help="task to show (default: the run's, else confined-waypoints)")
     v.add_argument("--checkpoint", default=None, help="checkpoint file (default: the run's newest)")
     v.add_argument("--trajectory", default=None, metavar="FILE.npz", help="play a recorded trajectory instead")
-    v.add_argument("--num-envs", type=_bounded_int(1, 16), default=1, help="environments side by side (1-16)")
+    v.add_argument("--num-envs", type=bounded(int, 1, 16), default=1, help="environments side by side (1-16)")
     v.add_argument("--physics", choices=["mjx", "native"], default="mjx",
                    help="physics of the rollouts: mjx, or native (MuJoCo's C engine; no MJX compilation of physics)")
-    v.add_argument("--seed", type=_bounded_int(0, 2**31 - 1), default=0, help="seed of the first rollout")
-    v.add_argument("--steps", type=_bounded_int(1, 100000), default=500, help="control steps per rollout (50 per second)")
+    v.add_argument("--seed", type=SEED, default=0, help="seed of the first rollout")
+    v.add_argument("--steps", type=bounded(int, 1, 100000), default=500, help="control steps per rollout (50 per second)")
     v.add_argument("--save", default=None, metavar="FILE.npz",
                    help="record one rollout into FILE.npz and exit instead of serving")
     _add_server_options(v)
@@ -557,21 +462,10 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _join_negative_coordinates(argv: list[str]) -> list[str]:
-    """Let `--start -2,0,0.27` work: argparse would read '-2,0,0.27' as an option."""
-    out = []
-    for token in argv:
-        if out and out[-1] in ("--start", "--goal") and token[:1] == "-" and token[1:2].isdigit():
-            out[-1] = f"{out[-1]}={token}"
-        else:
-            out.append(token)
-    return out
-
-
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
-        args = build_parser().parse_args(_join_negative_coordinates(argv))
+        args = build_parser().parse_args(join_negative_coordinates(argv))
     except SystemExit as exc:  # a usage error (already printed on one line) or --help: a return code
         return exc.code if isinstance(exc.code, int) else 2
     from legged.tasks import UnknownTaskError

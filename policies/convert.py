@@ -64,10 +64,10 @@ def convert_run(run_dir: str | Path, trust_pickles: bool) -> dict:
     """Convert every checkpoint of a run that needs unpickling; without `trust_pickles` only list them."""
     run = RunDir(run_dir)
     run.load_config()  # a run directory, or a clear error
-    todo = [p for p in run.checkpoints() if needs_conversion(p)]
-    if todo and not trust_pickles:
-        raise RunDirError(f"{len(todo)} checkpoint(s) of {run.path} need unpickling ({', '.join(p.name for p in todo)}); "
+    pickled = [p for p in run.checkpoints() if needs_conversion(p)]
+    if pickled and not trust_pickles:
+        raise RunDirError(f"{len(pickled)} checkpoint(s) of {run.path} need unpickling ({', '.join(p.name for p in pickled)}); "
                           "pickles can run code when loaded: convert them only if you trust this run, with "
                           f"legged convert-checkpoints {run.path} --trust-pickles")
-    converted = [str(_convert_brax(run, p) if p.suffix == ".pkl" else _convert_rsl(run, p)) for p in todo]
+    converted = [str(_convert_brax(run, p) if p.suffix == ".pkl" else _convert_rsl(run, p)) for p in pickled]
     return {"run": str(run.path), "converted": converted, "checkpoints": [str(p) for p in run.checkpoints()]}

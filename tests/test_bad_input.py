@@ -66,7 +66,7 @@ CASES = {
     "bench env: zero seconds": (["bench", "env", "--seconds", "0"], "greater than 0"),
     "bench env: endless seconds": (["bench", "env", "--seconds", "1e30"], "at most 3600"),
     "bench env: unknown physics": (["bench", "env", "--physics", "warp"], "choose from"),
-    "bench env: zero threads": (["bench", "env", "--threads", "0"], "must be >= 1"),
+    "bench env: zero threads": (["bench", "env", "--threads", "0"], "between 1"),
     "bench soccer: zero peer steps": (["bench", "soccer", "--peer-steps", "0"], "between 1"),
     "bench soccer: three a side": (["bench", "soccer", "--team-sizes", "3"], "1 and/or 2"),
     "bench plan: no worlds": (["bench", "plan", "--worlds", "0"], "between 1"),

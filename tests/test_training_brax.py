@@ -1,7 +1,6 @@
 """Training with the Brax backend: a tiny go1-flat run killed after a checkpoint, resumed with its optimiser
 state, then exported (its own file, so that pytest-xdist can run it beside the rsl-rl tests)."""
 
-import jax
 import numpy as np
 import pytest
 
