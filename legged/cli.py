@@ -6,106 +6,9 @@ import argparse
 import json
 import sys
 
-from legged.cli_args import (SEED, THREADS, Parser, bounded, choices, ints, join_negative_coordinates, task_names,
-                             xyz)
-
-
-def _print_records(records: list[dict], as_json: bool, print_table) -> int:
-    """Benchmark output: a JSON list, or the benchmark's own table."""
-    if as_json:
-        print(json.dumps(records))
-    else:
-        print_table(records)
-    return 0
-
-
-def cmd_world(args) -> int:
-    from legged.robots import GO1
-    from legged.worlds import generate_world, write_world
-
-    world = generate_world(args.seed, args.difficulty)
-    files = write_world(world, GO1, args.out)
-    summary = dict(world.summary(), files=files)
-    print(json.dumps(summary) if args.json else
-          f"world seed={world.seed} difficulty={world.difficulty} size={summary['size_m']} m "
-          f"min clearance={summary['min_clearance_m']} m\n  start={summary['start']} goal={summary['goal']}\n"
-          f"  wrote {files['npz']} and {files['xml']}")
-    return 0
-
-
-def _planner_config(args):
-    from planners import PlannerConfig
-
-    config = PlannerConfig(planner=args.planner, time_limit=args.time_limit, seed=args.planner_seed,
-                           spacing=args.spacing)
-    config.validate()
-    return config
-
-
-def _scene_maps(args):
-    """Height maps sampled from a user's MJCF scene (errors name the file and the cause)."""
-    from pathlib import Path
-
-    import mujoco
-
-    from planners import maps_from_scene, reference_between
-
-    if args.start is None or args.goal is None:
-        raise ValueError("--scene needs --start X,Y,Z and --goal X,Y,Z (body centre, metres)")
-    path = Path(args.scene)
-    if not path.is_file():
-        raise FileNotFoundError(f"scene file not found: {path}")
-    try:
-        model = mujoco.MjModel.from_xml_path(str(path))
-    except ValueError as exc:
-        raise ValueError(f"cannot load scene {path}: {exc}") from None
-    return maps_from_scene(model, reference_between(args.start, args.goal), args.resolution)
-
-
-def cmd_plan(args) -> int:
-    import numpy as np
-
-    from planners import HeightMaps, plan_path
-    from legged.robots import GO1
-    from legged.worlds import generate_world
-
-    config = _planner_config(args)  # bad settings fail before any sampling
-    if args.scene:
-        maps, start, goal = _scene_maps(args), np.array(args.start), np.array(args.goal)
-    else:
-        world = generate_world(args.seed, args.difficulty)
-        maps = HeightMaps.from_world(world)
-        start = np.array(args.start) if args.start else world.start
-        goal = np.array(args.goal) if args.goal else world.goal
-    plan = plan_path(maps, start, goal, GO1, config)
-    if args.json:
-        print(json.dumps(plan.to_json()))
-    else:
-        print(f"{plan.planner}: {len(plan.waypoints)} waypoints, {plan.length_m:.3f} m, planned in "
-              f"{plan.plan_time_s:.3f} s\n  x y z roll pitch yaw:")
-        for pose in plan.waypoints:
-            print("  " + " ".join(f"{v:7.3f}" for v in pose))
-    return 0
-
-
-def cmd_bench_plan(args) -> int:
-    from planners.bench import bench_planner, print_table
-
-    records = bench_planner(args.difficulties, args.worlds, _planner_config(args), args.first_seed,
-                            progress=not args.quiet)
-    return _print_records(records, args.json, print_table)
-
-
-def _add_planner_options(parser) -> None:
-    from planners import PLANNERS
-
-    parser.add_argument("--planner", default="rrtconnect",
-                        help=f"OMPL planner: {', '.join(PLANNERS)} (RRT*, BIT* style names work too)")
-    parser.add_argument("--time-limit", type=bounded(float, 0.0, 3600.0), default=5.0,
-                        help="seconds the planner may search")
-    parser.add_argument("--spacing", type=bounded(float, 0.01, 10.0), default=0.5,
-                        help="largest distance between waypoints, m")
-    parser.add_argument("--planner-seed", type=SEED, default=0, help="seed of OMPL's sampling")
+from legged.cli_nav import _print_records, add_bench_plan, add_navigation_commands
+from legged.cli_args import (SEED, THREADS, Parser, add_physics_options, bounded, choices, ints, join_negative_coordinates,
+                             task_names)
 
 
 def cmd_bench(args) -> int:
@@ -151,13 +54,6 @@ def cmd_bench_soccer(args) -> int:
     return _print_records(records, args.json, print_soccer_table)
 
 
-def _add_physics_options(parser, default: str = "mjx") -> None:
-    parser.add_argument("--physics", choices=["mjx", "native"], default=default,
-                        help="physics engine: mjx (JAX; for accelerators) or native (MuJoCo's C engine; fastest on a CPU)")
-    parser.add_argument("--threads", type=THREADS, default=0, metavar="N",
-                        help="CPU threads of native physics and torch (default: every core)")
-
-
 def cmd_train(args) -> int:
     from policies.training import resume_run, start_run
 
@@ -170,7 +66,7 @@ def cmd_train(args) -> int:
             raise ValueError("name a task (see `legged tasks`) or continue a run with --resume DIR")
         record = start_run(args.task, args.run_dir, backend=args.backend, num_envs=args.num_envs,
                            timesteps=args.timesteps, seed=args.seed, overrides=args.set, progress=not args.quiet,
-                           physics=args.physics, threads=args.threads)
+                           physics=args.physics, threads=args.threads, init_from=args.init_from or "")
     print(json.dumps(record))
     return 0
 
@@ -179,21 +75,38 @@ def cmd_eval(args) -> int:
     import dataclasses
 
     from legged.tasks import task_entry
-    from policies.evaluate import evaluate, held_out, summarize
+    from policies.evaluate import HELD_OUT_SEED_OFFSET, confined_eval_config, evaluate, held_out, summarize
     from policies.policy_io import load_policy
     from policies.run_dir import check_compatible
     from policies.training import build_env
 
-    if args.episodes < 1:
-        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
-    policy, config = load_policy(args.run_dir, args.checkpoint)
-    env = build_env(dataclasses.replace(config, env=held_out(config.task, config.env)))
-    check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
-    finals = evaluate(env, policy, args.episodes, args.seed, args.physics, args.num_envs, args.threads or None,
-                      progress=not args.quiet)
+    from policies.run_dir import RunDir
+
+    config = RunDir(args.run_dir).load_config()
     confined = task_entry(config.task).kind == "confined"
-    report = dict(summarize(finals, confined), physics=args.physics, seed=args.seed,
-                  checkpoint=str(policy.checkpoint), trained_steps=policy.step, task=config.task)
+    if not confined and (args.difficulty is not None or args.world_seed is not None):
+        raise ValueError(f"--difficulty and --world-seed apply to confined tasks; {config.task} has no worlds")
+    policy, config = load_policy(args.run_dir, args.checkpoint)
+    report = dict(physics=args.physics, seed=args.seed, checkpoint=str(policy.checkpoint), trained_steps=policy.step,
+                  task=config.task)
+    if not confined:
+        env = build_env(dataclasses.replace(config, env=held_out(config.task, config.env)))
+        check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+        finals = evaluate(env, policy, args.episodes, args.seed, args.physics, args.num_envs or 16,
+                          args.threads or None, progress=not args.quiet)
+        report = dict(summarize(finals, False), **report)
+    else:  # a fixed set of held-out worlds per difficulty, one episode each, every episode to its end
+        report["world_seed"] = args.world_seed if args.world_seed is not None else \
+            config.env.world_seed + HELD_OUT_SEED_OFFSET
+        report["difficulties"] = {}
+        for level in args.difficulty if args.difficulty is not None else config.env.difficulties:
+            env_config = confined_eval_config(config.env, level, args.episodes, args.world_seed)
+            env = build_env(dataclasses.replace(config, env=env_config), progress=not args.quiet)
+            check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+            finals = evaluate(env, policy, args.episodes, args.seed, args.physics,
+                              args.num_envs or min(args.episodes, 64), args.threads or None,
+                              progress=not args.quiet, per_world=True)
+            report["difficulties"][str(level)] = summarize(finals, True)
     print(json.dumps(report) if args.json else json.dumps(report, indent=2))
     return 0
 
@@ -262,10 +175,12 @@ def cmd_tasks(args) -> int:
 
 
 def cmd_demo(args) -> int:
+    from legged.cli_nav import shipped_policy
     from legged.demo import run_demo
 
     view = {"host": args.host, "port": args.port} if args.view else None
-    return run_demo(args.out, args.seconds, args.seed, args.difficulty, view=view, physics=args.physics)
+    return run_demo(args.out, args.seed, args.difficulty, shipped_policy(args.policy), view=view,
+                    physics=args.physics)
 
 
 def cmd_view(args) -> int:
@@ -301,15 +216,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = Parser(prog="legged", description="Legged-robot RL in MuJoCo/MJX.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
 
-    w = sub.add_parser("world", help="generate a confined world (world.npz + world.xml)")
-    w.add_argument("--seed", type=SEED, default=0)
-    w.add_argument("--difficulty", type=bounded(int, 0, 20), default=0, help="0/1/2 give 3/4/5 m tunnels; higher is longer")
-    w.add_argument("--out", required=True, help="output directory")
-    w.add_argument("--json", action="store_true", help="print a JSON summary")
-    w.set_defaults(fn=cmd_world)
-
+    add_navigation_commands(sub)
     b = sub.add_parser("bench", help="benchmarks")
     bsub = b.add_subparsers(dest="what", required=True)
+    add_bench_plan(bsub)
     be = bsub.add_parser("env", help="environment steps per second on MJX and native MuJoCo, beside bare physics")
     be.add_argument("--task", default="confined-waypoints")
     be.add_argument("--batch", type=ints(1, 65536), default=[1, 64, 256], help="comma-separated batch sizes")
@@ -352,39 +262,20 @@ def build_parser() -> argparse.ArgumentParser:
     bs.add_argument("--json", action="store_true", help="print a JSON list, one object per measurement")
     bs.add_argument("--quiet", action="store_true", help="no progress messages")
     bs.set_defaults(fn=cmd_bench_soccer)
-    bp = bsub.add_parser("plan", help="planning time and path length per difficulty over generated worlds")
-    bp.add_argument("--difficulties", type=ints(0, 20), default=[0, 1, 2], help="comma-separated levels")
-    bp.add_argument("--worlds", type=bounded(int, 1, 10000), default=20, help="worlds per difficulty (seeds first-seed onward)")
-    bp.add_argument("--first-seed", type=SEED, default=0)
-    _add_planner_options(bp)
-    bp.add_argument("--json", action="store_true", help="print a JSON list, one object per difficulty")
-    bp.add_argument("--quiet", action="store_true", help="no progress bars")
-    bp.set_defaults(fn=cmd_bench_plan)
-
-    pl = sub.add_parser("plan", help="plan body-pose waypoints through a generated world or an MJCF scene")
-    pl.add_argument("--seed", type=SEED, default=0, help="seed of the generated world")
-    pl.add_argument("--difficulty", type=bounded(int, 0, 20), default=0)
-    pl.add_argument("--scene", default=None, help="plan through this MJCF scene instead (needs --start, --goal)")
-    pl.add_argument("--start", type=xyz, default=None, help="body centre X,Y,Z (default: the world's start)")
-    pl.add_argument("--goal", type=xyz, default=None, help="body centre X,Y,Z (default: the world's goal)")
-    pl.add_argument("--resolution", type=bounded(float, 0.005, 1.0), default=0.05, help="map resolution when sampling --scene, m")
-    _add_planner_options(pl)
-    pl.add_argument("--json", action="store_true",
-                    help="print one JSON object: waypoints [x, y, z, roll, pitch, yaw], length_m, plan_time_s, planner")
-    pl.set_defaults(fn=cmd_plan)
-
     tr = sub.add_parser("train", help="train a policy (Brax PPO or rsl-rl PPO) into a run directory")
     tr.add_argument("task", nargs="?", help="task name (legged tasks)")
     tr.add_argument("--backend", choices=["rsl", "brax"], default="rsl")
     tr.add_argument("--num-envs", type=bounded(int, 1, 2**20), default=256)
     tr.add_argument("--timesteps", type=bounded(int, 1, 10**12), default=1_000_000, help="environment steps, all envs together")
     tr.add_argument("--seed", type=SEED, default=0)
-    _add_physics_options(tr)
+    add_physics_options(tr)
     tr.add_argument("--run-dir", default=None, help="where the run is written (default runs/<task>-<time>)")
     tr.add_argument("--set", action="append", default=[], metavar="PATH=VALUE",
                     help="override any config field, e.g. ppo.learning_rate=3e-4, env.episode_seconds=10, "
                          "checkpoint_every=5, device=cuda (repeatable; see config.yaml of a run for all fields)")
     tr.add_argument("--resume", default=None, metavar="DIR", help="continue the run in DIR from its last checkpoint")
+    tr.add_argument("--init-from", default=None, metavar="RUN",
+                    help="warm start from RUN's networks (rsl; e.g. the go1-flat walker for a confined follower)")
     tr.add_argument("--quiet", action="store_true", help="no progress bar")
     tr.set_defaults(fn=cmd_train)
 
@@ -393,8 +284,15 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--checkpoint", default=None, help="a checkpoint file (default: the run's newest)")
     ev.add_argument("--episodes", type=bounded(int, 1, 100000), default=32)
     ev.add_argument("--seed", type=SEED, default=12345, help="seed of the evaluation episodes")
-    _add_physics_options(ev)
-    ev.add_argument("--num-envs", type=bounded(int, 1, 4096), default=16, help="episodes run side by side")
+    add_physics_options(ev)
+    ev.add_argument("--num-envs", type=bounded(int, 1, 4096), default=None,
+                    help="episodes run side by side (default 16; confined tasks: all, up to 64)")
+    ev.add_argument("--difficulty", type=ints(0, 20), default=None,
+                    help="confined tasks: comma-separated difficulty levels, --episodes held-out worlds each "
+                         "(default: the levels the run trained on)")
+    ev.add_argument("--world-seed", type=SEED, default=None,
+                    help="confined tasks: seed of the evaluation worlds (default: the training seed + 1000003, "
+                         "worlds never trained on)")
     ev.add_argument("--json", action="store_true", help="one-line JSON")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
     ev.set_defaults(fn=cmd_eval)
@@ -433,13 +331,14 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--json", action="store_true", help="one JSON list")
     t.set_defaults(fn=cmd_tasks)
 
-    d = sub.add_parser("demo", help="generate a world and run Go1 in it (MJX and native MuJoCo)")
+    d = sub.add_parser("demo", help="generate a tunnel, plan through it, and watch the shipped follower walk Go1 "
+                                    "to the goal")
     d.add_argument("--out", default="legged-demo", help="where to write the world files")
-    d.add_argument("--seconds", type=bounded(float, 0.0, 3600.0), default=4.0, help="simulated seconds")
     d.add_argument("--seed", type=SEED, default=0)
     d.add_argument("--difficulty", type=bounded(int, 0, 20), default=1)
-    d.add_argument("--physics", type=choices("mjx", "native"), default=["mjx", "native"],
-                   help="comma-separated physics engines to step side by side (default both, with their qpos gap)")
+    d.add_argument("--policy", default=None, help="a waypoint-follower run (default: the shipped follower)")
+    d.add_argument("--physics", type=choices("mjx", "native"), default=["native"],
+                   help="comma-separated physics engines to navigate in (default native; mjx,native runs both)")
     d.add_argument("--view", action="store_true", help="afterwards, serve the dashboard on the demo's world")
     _add_server_options(d)
     d.set_defaults(fn=cmd_demo)

@@ -98,3 +98,11 @@ def join_negative_coordinates(argv: list[str]) -> list[str]:
         else:
             out.append(token)
     return out
+
+
+def add_physics_options(parser, default: str = "mjx") -> None:
+    """--physics and --threads."""
+    parser.add_argument("--physics", choices=["mjx", "native"], default=default,
+                        help="physics engine: mjx (JAX; for accelerators) or native (MuJoCo's C engine; fastest on a CPU)")
+    parser.add_argument("--threads", type=THREADS, default=0, metavar="N",
+                        help="CPU threads of native physics and torch (default: every core)")

@@ -60,7 +60,8 @@ class TaskEntry:
 
 TASKS: dict[str, TaskEntry] = {e.name: e for e in (
     TaskEntry("go1-flat", FlatEnv, FlatConfig(), GO1, "locomotion"),
-    TaskEntry("confined-waypoints", ConfinedEnv, ConfinedConfig(mode="waypoints"), GO1, "confined"),
+    TaskEntry("confined-waypoints", ConfinedEnv, ConfinedConfig(mode="waypoints", six_dof_command=True), GO1,
+              "confined"),
     TaskEntry("confined-goal", ConfinedEnv, ConfinedConfig(mode="goal"), GO1, "confined"),
     TaskEntry("confined-velocity", ConfinedEnv, ConfinedConfig(mode="velocity"), GO1, "confined"),
     TaskEntry("confined-skills", ConfinedEnv, ConfinedConfig(mode="skills"), GO1, "confined"),

@@ -59,3 +59,41 @@ def print_table(records: list[dict]) -> None:
               f"{_fmt(r['median_length_m'], '16.3f')} {r['straight_line_m']:>11.3f}")
 
 
+
+
+PREVIOUS_PLANNER = PlannerConfig(planner="rrtconnect", space="full")
+"""The planner before narrow-passage support (6-D sampling with RRTConnect), measured beside the current one."""
+
+
+def bench_narrow(configs: dict[str, PlannerConfig], resolution: float = 0.025, progress: bool = True) -> dict:
+    """Plan every scene of planners.narrow_scenes with each named planner config; one record per (scene,
+    config) with its wall-clock time (simplification included, map sampling excluded), plus a summary."""
+    import time
+
+    import mujoco
+
+    from planners.narrow_scenes import narrow_scenes
+    from planners.scene_maps import maps_from_scene, reference_between
+
+    records = []
+    for scene in tqdm(narrow_scenes(GO1), desc="narrow scenes", unit="scene", disable=not progress):
+        model = mujoco.MjModel.from_xml_string(scene.xml)
+        maps = maps_from_scene(model, reference_between(np.array(scene.start), np.array(scene.goal)), resolution)
+        for label, config in configs.items():
+            began = time.perf_counter()
+            try:
+                plan = plan_path(maps, scene.start, scene.goal, GO1, config)
+                record = {"solved": True, "planner_used": plan.planner, "length_m": round(plan.length_m, 4),
+                          "min_body_height_m": round(float(plan.waypoints[:, 2].min()), 4)}
+            except PlanningError as exc:
+                record = {"solved": False, "error": str(exc)[:200]}
+            records.append({"scene": scene.name, "config": label, "time_s": round(time.perf_counter() - began, 4),
+                            **record})
+    summary = {}
+    for label in configs:
+        mine = [r for r in records if r["config"] == label]
+        solved = [r["time_s"] for r in mine if r["solved"]]
+        summary[label] = {"scenes": len(mine), "solved": len(solved), "success_rate": round(len(solved) / len(mine), 3),
+                          "median_time_s": round(float(np.median(solved)), 4) if solved else None,
+                          "max_time_s": round(float(np.max(solved)), 4) if solved else None}
+    return {"resolution_m": resolution, "summary": summary, "scenes": records}

@@ -75,6 +75,9 @@ class BodyCheckConfig:
     """Added to every half extent of the body box, metres."""
     check_heights: bool = True
     """Require the body to stand within the robot's leg reach above the floor under every foot."""
+    stance_slack: float = 0.05
+    """A foot whose nominal stance point has no floor within reach may step up to this far inward (a narrower
+    stance, toward the body's centre line), metres; 0 keeps the nominal stance."""
 
 
 class BodyChecker:
@@ -88,6 +91,9 @@ class BodyChecker:
         self.top_points = faces[faces[:, 2] > 0]
         stance = stance_points(robot)
         self.stance_points = np.concatenate([stance, np.zeros((len(stance), 1))], 1)
+        inward = stance.copy()
+        inward[:, 1] -= np.sign(stance[:, 1]) * np.minimum(config.stance_slack, np.abs(stance[:, 1]))
+        self.narrow_stance_points = np.concatenate([inward, np.zeros((len(stance), 1))], 1)
         self.height_range = robot.body_height_range
 
     def _world(self, poses: np.ndarray, rot: np.ndarray, body_points: np.ndarray) -> np.ndarray:
@@ -98,15 +104,20 @@ class BodyChecker:
         return self.maps.lookup(points[..., :2].reshape(-1, 2), ceiling).reshape(n, p)
 
     def stance_heights(self, poses, rot: np.ndarray | None = None) -> np.ndarray:
-        """Height of the body above the floor at each stance point, shape (n, n_feet) (nan off the map).
+        """Height of the body above the floor at each foot's stance point, shape (n, n_feet) (nan off the map):
+        the nominal point, or the narrower one (`stance_slack`) where only that one is within reach.
 
         `rot` may pass the poses' rotation matrices when the caller has them already.
         """
         poses = np.atleast_2d(np.asarray(poses, float))
         if rot is None:
             rot = rotation_rpy(poses[:, 3], poses[:, 4], poses[:, 5])
-        stance = self._world(poses, rot, self.stance_points)
-        return stance[..., 2] - self._surface(stance)
+        nominal, narrow = (self._world(poses, rot, p) for p in (self.stance_points, self.narrow_stance_points))
+        h_nominal = nominal[..., 2] - self._surface(nominal)
+        h_narrow = narrow[..., 2] - self._surface(narrow)
+        lo, hi = self.height_range
+        reach = lambda h: (h >= lo - 1e-9) & (h <= hi + 1e-9)
+        return np.where(~reach(h_nominal) & reach(h_narrow), h_narrow, h_nominal)
 
     def codes(self, poses) -> np.ndarray:
         """Validity code of each pose in (n, 6): VALID, OFF_MAP, OUT_OF_REACH, HITS_CEILING or HITS_FLOOR."""

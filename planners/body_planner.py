@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 
 import numpy as np
 from ompl import base as ob
@@ -24,6 +25,8 @@ from ompl import util as ou
 from legged.robots import GO1
 from legged.robots.spec import RobotSpec
 from planners.body_check import BodyCheckConfig, BodyChecker
+from planners.box_space import BoxSpace
+from planners.pose_band import ProjectedSpace
 from legged.worlds.maps import HeightMaps
 
 ou.setLogLevel(ou.LOG_ERROR)
@@ -44,11 +47,16 @@ class PlanningError(ValueError):
     """No plan: the start or goal is invalid or off the map, or no path was found in time. Says which."""
 
 
+LATTICE, AUTO = "lattice", "auto"
+"""Not OMPL: the complete (x, y, yaw) grid search of planners.lattice (narrow corridors), and the default:
+RRTConnect for `PlannerConfig.quick_checks` motion checks, then the lattice search."""
+
+
 def planner_key(name: str) -> str:
     """Canonical planner name: 'RRT*' -> 'rrtstar', 'BIT*' -> 'bitstar', 'RRTConnect' -> 'rrtconnect'."""
     key = name.lower().replace("*", "star").replace("-", "").replace("_", "").replace(" ", "")
-    if key not in PLANNERS:
-        raise PlanningError(f"unknown planner {name!r}; choose one of {', '.join(PLANNERS)}")
+    if key not in PLANNERS and key not in (LATTICE, AUTO):
+        raise PlanningError(f"unknown planner {name!r}; choose one of {', '.join([AUTO, LATTICE, *PLANNERS])}")
     return key
 
 
@@ -56,10 +64,14 @@ def planner_key(name: str) -> str:
 class PlannerConfig:
     """Settings of one planning query."""
 
-    planner: str = "rrtconnect"
-    """OMPL planner (see PLANNERS); 'RRT*', 'BIT*', 'AORRTC' style names are accepted."""
+    planner: str = "auto"
+    """auto (RRTConnect briefly, then the lattice search), lattice, or an OMPL planner (see PLANNERS; 'RRT*',
+    'BIT*', 'AORRTC' style names are accepted)."""
     time_limit: float = 5.0
-    """Seconds the planner may search (optimal planners use all of it)."""
+    """Seconds an OMPL planner may search (optimal planners use all of it; the lattice search is complete)."""
+    quick_checks: int = 60
+    """auto: motion checks RRTConnect may spend before the lattice search takes over (a count, not seconds, so
+    that the same query takes the same route on every machine)."""
     seed: int = 0
     """Seed of OMPL's random sampling; the same seed gives the same path (for planners that stop early)."""
     simplify: bool = True
@@ -78,11 +90,16 @@ class PlannerConfig:
     """Largest state-space step between collision checks along a motion, metres."""
     body: BodyCheckConfig = BodyCheckConfig()
     """Body-box margin and leg-reach check."""
+    space: str = "projected"
+    """projected: search x, y, yaw, with height, roll and pitch put in the middle of the feasible band
+    (planners.pose_band; narrow height bands cost nothing); full: sample all six (the earlier planner)."""
 
     def validate(self) -> None:
         """Raise PlanningError on values that cannot work."""
         planner_key(self.planner)
-        for name in ("time_limit", "spacing", "angle_weight", "max_step", "check_step"):
+        if self.space not in ("projected", "full"):
+            raise PlanningError(f"space must be 'projected' or 'full', got {self.space!r}")
+        for name in ("time_limit", "quick_checks", "spacing", "angle_weight", "max_step", "check_step"):
             if getattr(self, name) <= 0:
                 raise PlanningError(f"{name} must be > 0, got {getattr(self, name)}")
         if not (0 <= self.max_roll < math.pi / 2 and 0 <= self.max_pitch < math.pi / 2):
@@ -123,23 +140,17 @@ def path_length(waypoints: np.ndarray) -> float:
     return float(np.linalg.norm(np.diff(waypoints[:, :3], axis=0), axis=1).sum())
 
 
-class _Space:
+class _Space(BoxSpace):
     """Conversions between poses and the scaled (x, y, h, roll, pitch, yaw) OMPL state, plus the space."""
 
-    def __init__(self, maps: HeightMaps, robot: RobotSpec, config: PlannerConfig, heading: float):
-        self.maps, self.heading, self.w = maps, heading, config.angle_weight
-        self.space = ob.RealVectorStateSpace(6)
+    def __init__(self, maps: HeightMaps, robot: RobotSpec, config: PlannerConfig, heading: float,
+                 checker: BodyChecker):
+        self.maps, self.heading, self.w, self.checker = maps, heading, config.angle_weight, checker
         lo_h, hi_h = robot.body_height_range
-        low = [maps.origin[0], maps.origin[1], lo_h - 0.05,
-               -self.w * config.max_roll, -self.w * config.max_pitch, -self.w * math.pi]
-        high = [maps.upper[0], maps.upper[1], hi_h + 0.05,
-                self.w * config.max_roll, self.w * config.max_pitch, self.w * math.pi]
-        bounds = ob.RealVectorBounds(6)
-        for k in range(6):
-            bounds.setLow(k, low[k])
-            bounds.setHigh(k, high[k])
-        self.space.setBounds(bounds)
-        self.low, self.high = np.array(low), np.array(high)
+        super().__init__([maps.origin[0], maps.origin[1], lo_h - 0.05,
+                          -self.w * config.max_roll, -self.w * config.max_pitch, -self.w * math.pi],
+                         [maps.upper[0], maps.upper[1], hi_h + 0.05,
+                          self.w * config.max_roll, self.w * config.max_pitch, self.w * math.pi])
 
     def to_poses(self, vectors: np.ndarray) -> np.ndarray:
         """Scaled states (n, 6) -> poses (n, 6)."""
@@ -148,36 +159,37 @@ class _Space:
         z = v[:, 2] + self.maps.lookup(v[:, :2])
         return np.stack([v[:, 0], v[:, 1], z, v[:, 3] / self.w, v[:, 4] / self.w, yaw], 1)
 
+    def valid(self, vectors: np.ndarray) -> np.ndarray:
+        """Whether each state's pose passes the body check."""
+        return self.checker.valid(self.to_poses(vectors))
+
     def to_vector(self, pose) -> np.ndarray:
         """One pose (6,) -> scaled state (6,)."""
         rel_yaw = (pose[5] - self.heading + math.pi) % (2 * math.pi) - math.pi
         h = pose[2] - float(self.maps.lookup(np.asarray(pose[None, :2], float))[0])
         return np.array([pose[0], pose[1], h, self.w * pose[3], self.w * pose[4], self.w * rel_yaw])
 
-    def state(self, pose):
-        """An OMPL state holding `pose`."""
-        s = self.space.allocState()
-        for k, v in enumerate(self.to_vector(pose)):
-            s[k] = float(v)
-        return s
 
-
-def _values(state) -> np.ndarray:
-    return np.array([state[k] for k in range(6)])
+def _values(state, dim: int) -> np.ndarray:
+    return np.array([state[k] for k in range(dim)])
 
 
 class _BatchMotionValidator(ob.MotionValidator):
     """Checks all states along a motion in one vectorised call (OMPL's default checks one at a time)."""
 
-    def __init__(self, info, space: _Space, checker: BodyChecker, step: float):
+    def __init__(self, info, space, step: float):
         super().__init__(info)
-        self.space, self.checker, self.step = space, checker, step
+        self.space, self.step, self.calls = space, step, 0
 
     def checkMotion(self, a, b, *unused) -> bool:  # noqa: N802 (OMPL's name)
-        va, vb = _values(a), _values(b)
+        self.calls += 1
+        return self.checkMotion_values(_values(a, self.space.dim), _values(b, self.space.dim))
+
+    def checkMotion_values(self, va: np.ndarray, vb: np.ndarray) -> bool:  # noqa: N802
+        """The straight motion between two state vectors is valid (its start is assumed valid)."""
         n = max(int(math.ceil(np.linalg.norm(vb - va) / self.step)), 1)
         states = va + np.linspace(0.0, 1.0, n + 1)[1:, None] * (vb - va)  # a is valid by OMPL's convention
-        return bool(self.checker.valid(self.space.to_poses(states)).all())
+        return bool(self.space.valid(states).all())
 
 
 def _seed_ompl(seed: int) -> None:
@@ -203,9 +215,12 @@ def _check_endpoint(name: str, pose: np.ndarray, checker: BodyChecker, space: _S
     if np.any(state < space.low - 1e-9) or np.any(state > space.high + 1e-9):
         raise PlanningError(f"the {name} pose {np.round(pose, 3).tolist()} lies outside the planning bounds "
                             f"{np.round(space.low, 3).tolist()}..{np.round(space.high, 3).tolist()} (x, y, h, angles)")
+    if not space.valid(state)[0]:
+        raise PlanningError(f"the {name} pose {np.round(pose, 3).tolist()} is valid, but no level or floor-parallel "
+                            "body fits at its x, y and heading (plan with --space full to keep its own tilt)")
 
 
-def _subdivide(vertices: np.ndarray, spacing: float, space: _Space) -> np.ndarray:
+def _subdivide(vertices: np.ndarray, spacing: float, space) -> np.ndarray:
     """Poses along a state-space polyline: every segment split into equal parts so that consecutive poses
     are at most `spacing` apart, both in state space and in body-centre position."""
     out = [space.to_poses(vertices[:1])]
@@ -213,6 +228,8 @@ def _subdivide(vertices: np.ndarray, spacing: float, space: _Space) -> np.ndarra
         n = max(int(math.ceil(np.linalg.norm(b - a) / spacing - 1e-9)), 1)
         while True:  # z follows the floor, so positions can be farther apart than states
             poses = space.to_poses(a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a))
+            if np.isnan(poses).any():
+                raise PlanningError("internal: a waypoint between validated states has no feasible body pose")
             if np.linalg.norm(np.diff(poses[:, :3], axis=0), axis=1).max() <= spacing + 1e-9:
                 break
             n += 1
@@ -228,39 +245,91 @@ def plan_path(maps: HeightMaps, start, goal, robot: RobotSpec = GO1, config: Pla
     start, goal = np.asarray(start, float), np.asarray(goal, float)
     heading = math.atan2(goal[1] - start[1], goal[0] - start[0])
     start_pose, goal_pose = as_pose(start, heading), as_pose(goal, heading)
-    space = _Space(maps, robot, config, heading)
+    name = planner_key(config.planner)
+    if name in (LATTICE, AUTO) and config.space != "projected":
+        raise PlanningError(f"the {name} planner searches the projected space: use space='projected'")
+    if config.space == "projected":
+        space = ProjectedSpace(maps, checker, config, heading)
+    else:
+        space = _Space(maps, robot, config, heading, checker)
     _check_endpoint("start", start_pose, checker, space, config)
     _check_endpoint("goal", goal_pose, checker, space, config)
 
+    if name == LATTICE:
+        return _lattice_plan(space, checker, start_pose, goal_pose, config)
+    if name == AUTO:
+        began = time.perf_counter()
+        try:
+            quick = dataclasses.replace(config, planner="rrtconnect")
+            return _ompl_plan(space, checker, start_pose, goal_pose, quick, max_checks=config.quick_checks)
+        except PlanningError:
+            plan = _lattice_plan(space, checker, start_pose, goal_pose, config)
+            return dataclasses.replace(plan, plan_time_s=time.perf_counter() - began)
+    return _ompl_plan(space, checker, start_pose, goal_pose, config)
+
+
+def _ompl_plan(space, checker, start_pose, goal_pose, config: PlannerConfig, max_checks: int = 0) -> Plan:
+    """Plan with the OMPL planner of `config` (stopping after `max_checks` motion checks if > 0)."""
+    name = planner_key(config.planner)
     _seed_ompl(config.seed)
     setup = og.SimpleSetup(space.space)
-    setup.setStateValidityChecker(lambda s: bool(checker.valid(space.to_poses(_values(s)))[0]))
+    setup.setStateValidityChecker(lambda s: bool(space.valid(_values(s, space.dim))[0]))
     info = setup.getSpaceInformation()
-    motions = _BatchMotionValidator(info, space, checker, config.check_step)
+    motions = _BatchMotionValidator(info, space, config.check_step)
     info.setMotionValidator(motions)
     setup.setStartAndGoalStates(space.state(start_pose), space.state(goal_pose))
     setup.setOptimizationObjective(ob.PathLengthOptimizationObjective(info))
-    name = planner_key(config.planner)
     planner = PLANNERS[name](info)
     if hasattr(planner, "setRange"):
         planner.setRange(config.max_step)
     setup.setPlanner(planner)
-    setup.solve(config.time_limit)
+    if max_checks > 0:
+        setup.solve(ob.plannerOrTerminationCondition(
+            ob.timedPlannerTerminationCondition(config.time_limit),
+            ob.PlannerTerminationCondition(lambda: motions.calls >= max_checks)))
+    else:
+        setup.solve(config.time_limit)
     plan_time = setup.getLastPlanComputationTime()
     if not setup.haveExactSolutionPath():
+        limit = f"{max_checks} motion checks" if max_checks > 0 else f"{config.time_limit} s"
         raise PlanningError(
             f"no collision-free path from start {np.round(start_pose[:3], 3).tolist()} to goal "
-            f"{np.round(goal_pose[:3], 3).tolist()} found by {name} within {config.time_limit} s "
+            f"{np.round(goal_pose[:3], 3).tolist()} found by {name} within {limit} "
             "(the space may be blocked; a longer time limit helps only if it is not)")
-    if config.simplify:
+    if config.simplify and space.dim == 6:
         setup.simplifySolution(0.0)  # 0 = OMPL's bounded simplifyMax: deterministic
     path = setup.getSolutionPath()
-    vertices = np.array([[path.getState(i)[k] for k in range(6)] for i in range(path.getStateCount())])
+    vertices = np.array([_values(path.getState(i), space.dim) for i in range(path.getStateCount())])
+    if config.simplify and space.dim != 6:  # greedy shortcuts: far fewer (costlier) checks than OMPL's smoothing
+        from planners.lattice import shortcut
+
+        exact = lambda a, b: bool(motions.checkMotion_values(a, b))
+        vertices = shortcut(vertices, exact, exact)
+    return _finish(vertices, space, checker, start_pose, goal_pose, config, plan_time, name)
+
+
+def _lattice_plan(space, checker, start_pose, goal_pose, config: PlannerConfig) -> Plan:
+    from planners.lattice import lattice_path
+
+    began = time.perf_counter()
+    vertices = lattice_path(space, checker, start_pose, goal_pose, config.check_step, config.angle_weight)
+    if vertices is None:
+        raise PlanningError(
+            f"no collision-free path from start {np.round(start_pose[:3], 3).tolist()} to goal "
+            f"{np.round(goal_pose[:3], 3).tolist()}: the lattice search (every cell and heading) found none, so "
+            "the body does not fit through (at the map's resolution)")
+    return _finish(vertices, space, checker, start_pose, goal_pose, config, time.perf_counter() - began, "lattice")
+
+
+def _finish(vertices, space, checker, start_pose, goal_pose, config: PlannerConfig, plan_time: float,
+            name: str) -> Plan:
+    """The Plan of a solved state-space polyline: subdivided into waypoints and checked once more."""
     vertices[0], vertices[-1] = space.to_vector(start_pose), space.to_vector(goal_pose)
     waypoints = _subdivide(vertices, config.spacing, space)
+    waypoints[0], waypoints[-1] = start_pose, goal_pose  # exactly as asked (a projected space re-centres them)
     bad = np.flatnonzero(~checker.valid(waypoints))
-    if bad.size:  # cannot happen if OMPL validated every motion; refuse rather than hand out a colliding path
-        raise PlanningError(f"internal: waypoints {bad.tolist()} of the simplified path fail the body check")
+    if bad.size:  # cannot happen if every motion was validated; refuse rather than hand out a colliding path
+        raise PlanningError(f"internal: waypoints {bad.tolist()} of the planned path fail the body check")
     return Plan(waypoints=waypoints, length_m=path_length(waypoints), plan_time_s=float(plan_time), planner=name)
 
 

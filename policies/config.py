@@ -95,6 +95,8 @@ class TrainConfig:
     """Physics engine: mjx (JAX; fastest on an accelerator) or native (MuJoCo's C engine; fastest on a CPU)."""
     threads: int = 0
     """CPU threads of native physics and of torch (0: every core this process may use)."""
+    init_from: str = ""
+    """Run directory whose latest networks start this run (rsl backend; policies.warm_start), or '' for none."""
     ppo: PPOConfig = PPOConfig()
     """PPO hyper-parameters."""
     env: Any = None
@@ -134,6 +136,11 @@ class TrainConfig:
             raise ConfigError("selfplay.opponent=self-play needs the rsl backend and a state task (snapshots of the "
                               "learner are MLPs on the state features); use selfplay.opponent=scripted")
         _check_ppo(cfg.ppo)
+        if cfg.backend == "brax" and getattr(cfg.env, "curriculum", False):
+            raise ConfigError("the confined curriculum needs the rsl backend (Brax PPO's resets cannot hand an "
+                              "episode's level to the next); add --set env.curriculum=false for --backend brax")
+        if cfg.init_from and cfg.backend != "rsl":
+            raise ConfigError("init_from (a warm start) needs the rsl backend")
         if cfg.num_envs > 2**20 or cfg.timesteps > 10**12:
             raise ConfigError(f"num_envs ({cfg.num_envs}) must be at most {2**20:,} and timesteps ({cfg.timesteps}) "
                               f"at most {10**12:,}")

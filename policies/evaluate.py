@@ -41,25 +41,53 @@ def summarize(finals: list[dict], confined: bool) -> dict:
     if confined:
         success = np.array([f["success"] > 0 for f in finals])
         out["success_rate"] = float(success.mean())
+        out["success_rate_ci95"] = wilson_interval(int(success.sum()), len(success))
         out["time_to_goal_s"] = float(np.mean([f["time_to_goal_s"] for f, s in zip(finals, success) if s])) \
             if success.any() else None
         out["collisions_per_episode"] = float(np.mean([f["collisions"] for f in finals]))
+        out["collisions_per_success"] = float(np.mean([f["collisions"] for f, s in zip(finals, success) if s])) \
+            if success.any() else None
         out["final_distance_m"] = float(np.mean([f["final_distance_m"] for f in finals]))
     return out
 
 
+def wilson_interval(successes: int, trials: int, z: float = 1.96) -> list[float]:
+    """95% Wilson score interval of a success rate (sound at 0 and at 100%, unlike the normal one)."""
+    if trials == 0:
+        return [0.0, 1.0]
+    p = successes / trials
+    centre = (p + z * z / (2 * trials)) / (1 + z * z / trials)
+    half = z * np.sqrt(p * (1 - p) / trials + z * z / (4 * trials * trials)) / (1 + z * z / trials)
+    return [round(float(max(0.0, centre - half)), 4), round(float(min(1.0, centre + half)), 4)]
+
+
+def confined_eval_config(env_config, difficulty: int, episodes: int, world_seed: int | None):
+    """The env config of a fixed confined evaluation: `episodes` held-out worlds of one difficulty (seed
+    `world_seed`, by default the training seed + HELD_OUT_SEED_OFFSET), one episode per world, no curriculum."""
+    seed = env_config.world_seed + HELD_OUT_SEED_OFFSET if world_seed is None else world_seed
+    return dataclasses.replace(env_config, world_seed=seed, num_worlds=episodes, difficulties=(difficulty,),
+                               curriculum=False)
+
+
+def one_tile_each(first: int, count: int, tiles: int) -> dict:
+    """Carry of evaluation episodes first..first+count: episode k plays tile k (mod the number of tiles)."""
+    return {"level": np.zeros(count, np.int32), "tile": (np.arange(first, first + count) % tiles).astype(np.int32)}
+
+
 def evaluate(env, policy, episodes: int, seed: int, physics: str = "mjx", num_envs: int = 16,
-             threads: int | None = None, progress: bool = True) -> list[dict]:
+             threads: int | None = None, progress: bool = True, per_world: bool = False) -> list[dict]:
     """Run the deterministic policy for exactly `episodes` episodes, each to its end: `num_envs` environments
     at a time, each contributing its first episode only (counting the first episodes to finish would favour
     short ones, i.e. falls). The episodes' reset keys depend on `seed` and `num_envs` only, not on the physics
-    engine: both engines start the same episodes."""
+    engine: both engines start the same episodes. per_world (confined tasks): episode k plays world k of the
+    terrain (see `confined_eval_config`)."""
     num_envs = min(num_envs, episodes)
     vector = VectorEnv.of(env, num_envs, physics, threads)
     finals: list[dict] = []
     bar = tqdm(total=episodes, desc=f"eval ({physics})", unit="episode", disable=not progress)
     for first in range(0, episodes, num_envs):
-        batch = vector.reset(jax.random.fold_in(jax.random.PRNGKey(seed), first))
+        carry = one_tile_each(first, num_envs, env.terrain.num_tiles) if per_world else None
+        batch = vector.reset(jax.random.fold_in(jax.random.PRNGKey(seed), first), carry)
         obs, pending = batch.state.obs, np.ones(num_envs, bool)
         pending[episodes - first:] = False  # the last round may need fewer environments
         chunk: dict[int, dict] = {}

@@ -159,6 +159,12 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         alg.load(payload["alg"], None, strict=True)
         if launch.is_main:
             torch.set_rng_state(payload["torch_rng"])
+    elif config.init_from:
+        from policies.warm_start import warm_start
+
+        note = warm_start(alg, Path(config.init_from), env, venv.get_observations())
+        if progress and launch.is_main:
+            print(note)
     pool = None
     if config.self_play:
         from policies.selfplay import OpponentPool

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from policies.config import TrainConfig, apply_overrides
+from policies.config import ConfigError, TrainConfig, apply_overrides
 from policies.run_dir import RunDir
 
 
@@ -55,11 +55,13 @@ def _prepare(config: TrainConfig) -> bool:
 
 def start_run(task: str, run_dir: str | None, backend: str = "rsl", num_envs: int = 256, timesteps: int = 1_000_000,
               seed: int = 0, overrides: list[str] = (), progress: bool = True, physics: str = "mjx",
-              threads: int = 0) -> dict:
+              threads: int = 0, init_from: str = "") -> dict:
     """Resolve the config, create the run directory, train; returns the last metrics record."""
     config = TrainConfig(task=task, backend=backend, num_envs=num_envs, timesteps=timesteps, seed=seed,
-                         physics=physics, threads=threads).resolved()
+                         physics=physics, threads=threads, init_from=init_from).resolved()
     config = apply_overrides(config, list(overrides))
+    if config.init_from and not (Path(config.init_from) / "config.yaml").is_file():  # only when starting
+        raise ConfigError(f"init_from: {config.init_from} is not a run directory (no config.yaml)")
     main = _prepare(config)
     run = RunDir(run_dir or Path("runs") / f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
     if main:

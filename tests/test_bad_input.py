@@ -5,6 +5,7 @@ The CLI runs in this process (`legged.cli.main`), so the whole file takes second
 """
 
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -38,7 +39,17 @@ def files(tmp_path_factory):
     broken = d / "broken-run"
     broken.mkdir()
     (broken / "config.yaml").write_text("task: [unclosed\n")
+    # box tunnels to navigate: an open one, and one walled off in the middle
+    from legged.robots import GO1
+    from planners.narrow_scenes import block, tunnel_xml
+
+    (d / "tunnel.xml").write_text(tunnel_xml([]))
+    (d / "walled.xml").write_text(tunnel_xml([block(GO1, 0.0, 0.0)]))
     return d
+
+
+FOLLOWER = str(Path(__file__).resolve().parents[1] / "assets" / "policies" / "go1-confined-follower")
+"""The shipped waypoint follower (navigate's bad-input cases need a policy that can navigate)."""
 
 
 class _Boom:
@@ -101,8 +112,22 @@ CASES = {
     "export: damaged checkpoint": (["export", "{d}/run", "--onnx", "--out", "{d}/p.onnx"], "cannot be read"),
     "camera: not soccer": (["camera", "--task", "go1-flat"], "not a soccer task"),
     "camera: unknown task": (["camera", "--task", "nope"], "unknown task"),
-    "demo: zero seconds": (["demo", "--seconds", "0"], "greater than 0"),
-    "demo: endless seconds": (["demo", "--seconds", "inf"], "at most 3600"),
+    "demo: unknown physics": (["demo", "--physics", "bullet"], "bullet"),
+    "demo: policy of another task": (["demo", "--policy", "{d}/run"], "does not follow waypoints"),
+    "navigate: policy of another task": (["navigate", "--policy", "{d}/run"], "does not follow waypoints"),
+    "navigate: missing policy": (["navigate", "--policy", "{d}/none"], "not a run directory"),
+    "navigate: start in a wall": (["navigate", "--policy", FOLLOWER, "--scene", "{d}/tunnel.xml", "--start",
+                                   "-1.5,0.5,0.27", "--goal", "1.5,0,0.27"], "start pose"),
+    "navigate: goal off the map": (["navigate", "--policy", FOLLOWER, "--scene", "{d}/tunnel.xml", "--start",
+                                    "-1.5,0,0.27", "--goal", "9,0,0.27"], "outside the map"),
+    "navigate: scene without start": (["navigate", "--policy", FOLLOWER, "--scene", "{d}/tunnel.xml"],
+                                      "needs --start"),
+    "train: brax with the curriculum": (["train", "confined-waypoints", "--backend", "brax", "--run-dir", "{d}/t7"],
+                                        "env.curriculum=false"),
+    "train: warm start from nothing": (["train", "confined-waypoints", "--init-from", "{d}/none", "--run-dir",
+                                        "{d}/t8"], "not a run directory"),
+    "eval: difficulty of a flat task": (["eval", "{d}/run", "--difficulty", "1"], "apply to confined tasks"),
+    "eval: negative difficulty": (["eval", "{d}/run", "--difficulty", "-1"], "from 0 to 20"),
     "view: too many envs": (["view", "--num-envs", "64"], "between 1 and 16"),
     "view: missing trajectory": (["view", "--trajectory", "{d}/none.npz", "--port", "0"], "not found"),
     "view: empty trajectory": (["view", "--trajectory", "{d}/empty", "--port", "0"], "{d}/empty"),
@@ -132,6 +157,17 @@ def test_bad_input_is_one_line_and_exit_2(name, files, capsys):
 
 
 def test_nothing_half_written(files):
-    for name in ("t1", "t2", "t3", "t4", "t5", "t6", "w"):
+    for name in ("t1", "t2", "t3", "t4", "t5", "t6", "t7", "t8", "w"):
         assert not (files / name).exists(), name
     assert not (files / "p.onnx").exists()
+
+
+def test_navigate_reports_an_unreachable_goal_as_such(files, capsys):
+    """A walled-off goal is an outcome, not a crash: one line saying it cannot be reached, exit code 1, found by
+    the planner before anything is compiled."""
+    code = main(["navigate", "--policy", FOLLOWER, "--scene", str(files / "walled.xml"), "--start", "-1.5,0,0.27",
+                 "--goal", "1.5,0,0.27", "--json"])
+    out = capsys.readouterr().out.strip().splitlines()
+    assert code == 1 and len(out) == 1
+    report = __import__("json").loads(out[0])
+    assert report["success"] is False and report["reachable"] is False and "cannot be reached" in report["error"]

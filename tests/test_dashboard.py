@@ -12,6 +12,7 @@ import time
 from contextlib import redirect_stderr
 from pathlib import Path
 
+import jax.numpy as jnp
 import mujoco
 import numpy as np
 import pytest
@@ -286,3 +287,52 @@ def test_dashboard_in_headless_chromium(recorded, tmp_path):
     finally:
         proc.terminate()
         proc.wait(timeout=30)
+
+
+def test_first_view_of_a_confined_world_is_inside_the_tunnel(recorded, confined_env):
+    """A newcomer's first view shows the robot from inside its tunnel, under the ceiling, not the roof."""
+    from web.app import Dashboard, DashboardConfig
+
+    traj, _ = recorded
+    dashboard = Dashboard(DashboardConfig(host="127.0.0.1", port=free_port()), trajectory=traj)
+    dashboard.start()
+    try:
+        eye = np.asarray(dashboard.server.initial_camera.position, float)
+        target = np.asarray(dashboard.server.initial_camera.look_at, float)
+        assert np.linalg.norm(target[:2] - traj.qpos[0, 0, :2]) < 0.05
+        floor, ceiling = (float(f(jnp.asarray(eye[:2]))) for f in (confined_env.floor_height, confined_env.ceiling_height))
+        assert floor + 0.05 < eye[2] < ceiling - 0.05
+    finally:
+        dashboard.stop()
+
+
+def test_navigation_replans_round_trip_and_show_from_their_frame(recorded, server, tmp_path):
+    """A navigation's replanned paths are saved with the trajectory; the dashboard shows each from the frame
+    it was made on, and the target marker follows the newest one."""
+    import dataclasses
+
+    from web.overlays import Overlays
+    from web.trajectory import load_trajectory
+
+    traj, _ = recorded
+    replan = traj.paths[:1].copy()
+    replan[0, :, 1] += 0.3  # a path shifted sideways, followed from frame 20 on
+    nav = dataclasses.replace(traj, replans=replan, replan_len=traj.path_len[:1].copy(), replan_frame=np.array([20]))
+    loaded = load_trajectory(nav.save(tmp_path / "nav.npz"))
+    np.testing.assert_array_equal(loaded.replans, replan)
+    assert loaded.replan_frame.tolist() == [20]
+    with pytest.raises(ValueError, match="replan"):
+        dataclasses.replace(traj, replans=replan)  # without its lengths and frames
+    overlays = Overlays(server.scene, loaded)
+    assert overlays.available["replans"]
+    overlays.update(10, np.zeros((0, 3)))
+    assert not any(node.visible for node in overlays.nodes["replans"])
+    target_before = np.array(overlays.nodes["target"][0].position)
+    overlays.update(25, np.zeros((0, 3)))
+    assert all(node.visible for node in overlays.nodes["replans"])
+    index = min(int(loaded.waypoint[25, 0]), int(loaded.replan_len[0]) - 1)
+    np.testing.assert_allclose(overlays.nodes["target"][0].position, replan[0, index, :3], atol=1e-6)
+    assert not np.allclose(target_before[1], overlays.nodes["target"][0].position[1])
+    overlays.set_visible("replans", False)
+    assert not any(node.visible for node in overlays.nodes["replans"])
+    overlays.remove()

@@ -29,6 +29,9 @@ from web.trajectory import Trajectory
 
 CAMERA_OFFSET = np.array([-1.2, -1.2, 0.9])
 """Where the viewer's camera sits relative to the robot it looks at, metres."""
+TUNNEL_CAMERA_OFFSET = np.array([-0.7, -0.3, 0.12])
+"""The same in confined worlds (trajectories with planned paths): behind the robot inside the tunnel, under
+its ceiling, so that a first view shows the robot in the tunnel rather than the roof from above."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -260,6 +263,8 @@ class Dashboard:
         with self._lock:
             if self.overlays is not None:
                 self.overlays.set_visible(name, visible)
+                if name == "replans" and visible:  # which replans show depends on the frame
+                    self._render(self.player.frame)
 
     def _env_changed(self) -> None:
         with self._lock:
@@ -277,7 +282,11 @@ class Dashboard:
         clients = [client] if client is not None else list(self.server.get_clients().values())
         for c in clients:
             c.camera.look_at = base
-            c.camera.position = base + CAMERA_OFFSET
+            c.camera.position = base + self._camera_offset()
+
+    def _camera_offset(self) -> np.ndarray:
+        """Where the camera sits relative to the robot: inside the tunnel in confined worlds."""
+        return TUNNEL_CAMERA_OFFSET if self.traj is not None and self.traj.paths is not None else CAMERA_OFFSET
 
     def _base_position(self, frame: int, env: int) -> np.ndarray:
         with self._lock:  # the MjData is shared with playback
@@ -303,7 +312,7 @@ class Dashboard:
         base = self._base_position(0, self._env())  # a new rollout may start in another world: go there
         if first:
             self.server.initial_camera.look_at = base
-            self.server.initial_camera.position = base + CAMERA_OFFSET
+            self.server.initial_camera.position = base + self._camera_offset()
         self._look_at(None)
         info = traj.info
         worlds = ""

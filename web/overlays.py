@@ -1,5 +1,6 @@
 """Switchable overlays of a trajectory: planned path and waypoints, current target, height-scan points
-(floor and ceiling), contact points and the goal."""
+(floor and ceiling), contact points, the goal, and a navigation's replanned paths (each shown from the frame
+it was made on)."""
 
 from __future__ import annotations
 
@@ -10,11 +11,12 @@ from web.trajectory import Trajectory
 
 OVERLAYS = {"path": "planned path and waypoints", "target": "current target waypoint",
             "floor_scan": "floor height scan", "ceiling_scan": "ceiling height scan",
-            "contacts": "contact points", "goal": "goal"}
+            "contacts": "contact points", "goal": "goal", "replans": "replanned paths (navigation)"}
 """Overlay name -> what it shows (the dashboard's checkbox labels)."""
 
 COLOURS = {"path": (40, 120, 255), "target": (255, 140, 0), "floor_scan": (30, 190, 90),
-           "ceiling_scan": (220, 60, 200), "contacts": (230, 20, 20), "goal": (20, 200, 60)}
+           "ceiling_scan": (220, 60, 200), "contacts": (230, 20, 20), "goal": (20, 200, 60),
+           "replans": (150, 70, 230)}
 """Overlay colours (RGB)."""
 
 
@@ -45,7 +47,8 @@ class Overlays:
         """Which overlays this trajectory has data for."""
         t = self.traj
         return {"path": t.paths is not None, "target": t.waypoint is not None, "floor_scan": t.floor_scan is not None,
-                "ceiling_scan": t.ceiling_scan is not None, "contacts": True, "goal": t.goal is not None}
+                "ceiling_scan": t.ceiling_scan is not None, "contacts": True, "goal": t.goal is not None,
+                "replans": t.replans is not None}
 
     def _points(self, name, points, kind, size):
         return self.scene.add_point_cloud(name, np.asarray(points, np.float32), COLOURS[kind], point_size=size,
@@ -64,6 +67,18 @@ class Overlays:
             self.nodes["path"].append(self.scene.add_batched_axes(
                 f"{root}/path/poses", quat_from_rpy(path[:, 3:6]), xyz, axes_length=0.12, axes_radius=0.006,
                 visible=self.shown["path"]))
+        if t.replans is not None and env == 0:
+            self._replans = []
+            for r, (path, n) in enumerate(zip(t.replans, t.replan_len)):
+                xyz = path[:max(int(n), 1), :3].astype(np.float64) + offset
+                nodes = [self._points(f"{root}/replans/{r}/waypoints", xyz, "replans", 0.03)]
+                if len(xyz) > 1:
+                    nodes.append(self.scene.add_line_segments(f"{root}/replans/{r}/line", np.stack([xyz[:-1], xyz[1:]], 1),
+                                                              COLOURS["replans"], thickness=0.01, visible=False))
+                for node in nodes:
+                    node.visible = False  # shown from its frame on (update)
+                self._replans.append(nodes)
+                self.nodes["replans"].extend(nodes)
         if t.goal is not None:
             self.nodes["goal"].append(self.scene.add_icosphere(
                 f"{root}/goal", radius=0.08, color=COLOURS["goal"], opacity=0.8,
@@ -82,11 +97,19 @@ class Overlays:
     def update(self, frame: int, contacts: np.ndarray) -> None:
         """Move the per-frame overlays to `frame`; `contacts` are world contact points (k, 3) of all envs."""
         t = self.traj
+        active = -1  # the newest replan in force at this frame (environment 0)
+        if t.replans is not None:
+            active = int(np.searchsorted(t.replan_frame, frame, side="right")) - 1
+            for r, nodes in enumerate(self._replans):
+                for node in nodes:
+                    node.visible = self.shown["replans"] and r <= active
         for env in range(t.num_envs):
             offset = t.offsets[env]
             if self.nodes["target"]:
-                index = min(int(t.waypoint[frame, env]), int(t.path_len[env]) - 1)
-                self.nodes["target"][env].position = t.paths[env, index, :3].astype(np.float64) + offset
+                path, length = (t.replans[active], t.replan_len[active]) if env == 0 and active >= 0 else \
+                    (t.paths[env], t.path_len[env])
+                index = min(int(t.waypoint[frame, env]), int(length) - 1)
+                self.nodes["target"][env].position = path[index, :3].astype(np.float64) + offset
             for kind in ("floor_scan", "ceiling_scan"):
                 if self.nodes[kind]:
                     self.nodes[kind][env].points = (getattr(t, kind)[frame, env] + offset).astype(np.float32)
@@ -99,8 +122,13 @@ class Overlays:
         handle.visible = self.shown["contacts"] and "contacts" not in self._empty
 
     def set_visible(self, name: str, visible: bool) -> None:
-        """Switch one overlay on or off."""
+        """Switch one overlay on or off (replans then appear from their frames on, at the next update)."""
         self.shown[name] = visible
+        if name == "replans":
+            if not visible:
+                for handle in self.nodes[name]:
+                    handle.visible = False
+            return
         for handle in self.nodes[name]:
             handle.visible = visible and name not in self._empty
 

@@ -65,6 +65,12 @@ class Trajectory:
     """World positions of the ceiling height-scan points (frames, envs, points, 3), or None."""
     camera: np.ndarray | None = None
     """Camera observations (frames, envs, H, W, 3) uint8, or None."""
+    replans: np.ndarray | None = None
+    """Paths a navigation replanned for environment 0 (replans, max_waypoints, 6), or None."""
+    replan_len: np.ndarray | None = None
+    """Number of valid waypoints of each replanned path (replans,)."""
+    replan_frame: np.ndarray | None = None
+    """Frame from which each replanned path is followed (replans,)."""
 
     def __post_init__(self):
         frames, envs = self.qpos.shape[:2]
@@ -81,6 +87,11 @@ class Trajectory:
                 raise ValueError(f"trajectory {name} has shape {array.shape}; expected it to start with {lead}")
         if (self.paths is None) != (self.path_len is None):
             raise ValueError("a trajectory needs both paths and path_len, or neither")
+        replans = [getattr(self, k) is None for k in ("replans", "replan_len", "replan_frame")]
+        if len(set(replans)) > 1 or (not replans[0] and self.paths is None):
+            raise ValueError("a trajectory's replans need replan_len, replan_frame and the first paths")
+        if not replans[0] and not (len(self.replans) == len(self.replan_len) == len(self.replan_frame)):
+            raise ValueError("replans, replan_len and replan_frame must have one entry per replan")
 
     @property
     def num_frames(self) -> int:
@@ -100,7 +111,8 @@ class Trajectory:
         arrays = {"format": np.array(FORMAT), "model_mjb": np.frombuffer(model_to_bytes(self.model), np.uint8),
                   "dt": np.array(self.dt), "info": np.array(json.dumps(self.info)), "qpos": self.qpos,
                   "reward": self.reward, "done": self.done, "offsets": self.offsets}
-        for name in ("paths", "path_len", "waypoint", "goal", "floor_scan", "ceiling_scan", "camera"):
+        for name in ("paths", "path_len", "waypoint", "goal", "floor_scan", "ceiling_scan", "camera", "replans",
+                     "replan_len", "replan_frame"):
             if getattr(self, name) is not None:
                 arrays[name] = getattr(self, name)
         arrays.update({f"metric/{k}": v for k, v in self.metrics.items()})
@@ -145,7 +157,7 @@ def load_trajectory(path: str | Path) -> Trajectory:
     except Exception as exc:
         raise ValueError(f"{path}: the stored model cannot be loaded: {exc}") from None
     optional = {k: arrays.get(k) for k in ("paths", "path_len", "waypoint", "goal", "floor_scan", "ceiling_scan",
-                                           "camera")}
+                                           "camera", "replans", "replan_len", "replan_frame")}
     return Trajectory(model=model, dt=float(arrays["dt"]), qpos=arrays["qpos"], reward=arrays["reward"],
                       done=arrays["done"], offsets=arrays["offsets"], info=json.loads(str(arrays["info"])),
                       metrics={k[7:]: v for k, v in arrays.items() if k.startswith("metric/")}, **optional)

@@ -24,8 +24,10 @@ class MjxEnv(Env, abc.ABC):
 
     # ----------------------------------------------------------------- the task's verbs
     @abc.abstractmethod
-    def spawn(self, rng: jax.Array) -> Spawn:
-        """A new episode's physical state and info (randomisation included)."""
+    def spawn(self, rng: jax.Array, carry: dict | None = None) -> Spawn:
+        """A new episode's physical state and info (randomisation included). `carry` is what the episode
+        inherits from the environment's previous one (`carry`), or what an evaluator asks for; None at the
+        first reset."""
 
     @abc.abstractmethod
     def first_state(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
@@ -39,6 +41,11 @@ class MjxEnv(Env, abc.ABC):
     def transition(self, state: State, view: PhysicsView, actions: jax.Array) -> State:
         """The next State from stepped physics; its `pipeline_state` is the view after the task's rules (which
         may move bodies: then `info['teleported']` is set and the engine loads the view's qpos, qvel, ctrl)."""
+
+    def carry(self, info: dict) -> dict:
+        """What the next episode of an environment inherits from the one that just ended (its `info`), e.g. a
+        curriculum level; {} by default."""
+        return {}
 
     # ----------------------------------------------------------------- engine read-outs
     def mjx_model_for(self, info: dict):
@@ -82,14 +89,18 @@ class MjxEnv(Env, abc.ABC):
         return strong_types(self.transition(state, view, actions))
 
     # ----------------------------------------------------------------- MJX engine
-    def reset(self, rng: jax.Array) -> State:
-        rng, k_obs = jax.random.split(rng)
-        spawn = self.spawn(rng)
+    def spawned_mjx(self, rng: jax.Array, carry: dict | None = None) -> tuple[PhysicsView, dict, object]:
+        """(view, info, MJX data) of a spawned episode, forward-computed in MJX."""
+        spawn = self.spawn(rng, carry)
         model = self.mjx_model_for(spawn.info)
         data = mjx.make_data(model).replace(qpos=spawn.qpos, qvel=spawn.qvel, ctrl=spawn.ctrl)
         data = self.mjx_settle(model, data)
-        view = view_of_mjx(data, self.contact_forces(data), False, self.uses_cameras)
-        return self.start_episode(view, spawn.info, k_obs).replace(pipeline_state=data)
+        return view_of_mjx(data, self.contact_forces(data), False, self.uses_cameras), spawn.info, data
+
+    def reset(self, rng: jax.Array, carry: dict | None = None) -> State:
+        rng, k_obs = jax.random.split(rng)
+        view, info, data = self.spawned_mjx(rng, carry)
+        return self.start_episode(view, info, k_obs).replace(pipeline_state=data)
 
     def step(self, state: State, action: jax.Array, *args) -> State:
         ctrl, actions = self.prepare(state, action, *args)

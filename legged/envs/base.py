@@ -89,8 +89,8 @@ class LeggedEnv(MjxEnv, abc.ABC):
 
     # ----------------------------------------------------------------- task hooks
     @abc.abstractmethod
-    def _task_reset(self, rng: jax.Array) -> tuple[jax.Array, jax.Array, dict]:
-        """Spawn position (3,), yaw, and the task's entries of `info`."""
+    def _task_reset(self, rng: jax.Array, carry: dict | None) -> tuple[jax.Array, jax.Array, dict]:
+        """Spawn position (3,), yaw, and the task's entries of `info` (`carry`: see MjxEnv.spawn)."""
 
     @abc.abstractmethod
     def _command(self, data, info: dict) -> jax.Array:
@@ -103,6 +103,11 @@ class LeggedEnv(MjxEnv, abc.ABC):
     @abc.abstractmethod
     def _task_step(self, data, info: dict, action: jax.Array) -> tuple[dict, jax.Array, dict, dict]:
         """Weighted reward terms, success flag, task metrics and updated info after a physics step."""
+
+    @property
+    def command_names(self) -> tuple[str, ...]:
+        """Names of the command's components (observation layouts, warm starts)."""
+        return ()
 
     def _task_privileged(self, data, info: dict) -> jax.Array:
         """Extra privileged observation of the task (default: none)."""
@@ -186,14 +191,15 @@ class LeggedEnv(MjxEnv, abc.ABC):
         """Normal contact force on each foot, then on each body geom (N), of an MJX data."""
         return self._contacts(data)
 
-    def spawn(self, rng: jax.Array) -> Spawn:
+    def spawn(self, rng: jax.Array, carry: dict | None = None) -> Spawn:
         rng, k_dr, k_task = jax.random.split(rng, 3)
         dr = self.randomize(k_dr)
-        pos, yaw, task_info = self._task_reset(k_task)
+        pos, yaw, task_info = self._task_reset(k_task, carry)
         qpos = jnp.zeros(self.mj_model.nq).at[0:3].set(pos).at[3:7].set(quat_from_yaw(yaw))
         qpos = qpos.at[self._qadr].set(self._default_pose)
         info = dict(rng=rng, dr=dr, last_action=jnp.zeros(self.action_size), last_qvel=jnp.zeros(self.action_size),
-                    step=jnp.int32(0), collisions=jnp.float32(0.0), truncation=jnp.float32(0.0), **task_info)
+                    step=jnp.int32(0), collisions=jnp.float32(0.0), touching=jnp.zeros(1 + len(self._calf_bodies), bool),
+                    truncation=jnp.float32(0.0), **task_info)
         return Spawn(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv), ctrl=self._default_pose, info=info)
 
     def first_state(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
@@ -216,11 +222,12 @@ class LeggedEnv(MjxEnv, abc.ABC):
         action = jnp.where(bad, 0.0, action)
 
         terms, success, task_metrics, info = self._task_step(data, info, action)
-        n_feet = len(self._feet)
-        body_hits = jnp.sum(forces[n_feet:] > 1e-6)
-        knee_hits = self._knee_hits(data)
-        collisions = body_hits + knee_hits
-        info["collisions"] = info["collisions"] + collisions
+        body_touch = forces[len(self._feet):] > 1e-6
+        knee_touch = self._knee_contacts(data)
+        collisions = jnp.sum(body_touch) + jnp.sum(knee_touch)  # contacts this step (the penalty)
+        touching = jnp.concatenate([jnp.any(body_touch)[None], knee_touch])  # trunk, each knee
+        info["collisions"] = info["collisions"] + jnp.sum(touching & ~info["touching"])  # contacts that begin
+        info["touching"] = touching
         qd = self.joint_velocities(data)
         terms.update(self._penalties(data, info, action, qd, collisions))
 
@@ -242,12 +249,12 @@ class LeggedEnv(MjxEnv, abc.ABC):
         return state.replace(pipeline_state=data, obs=obs, reward=reward.astype(jnp.float32),
                              done=done.astype(jnp.float32), metrics=metrics, info=info)
 
-    def _knee_hits(self, data) -> jax.Array:
-        """Knees touching floor or ceiling, checked exactly against the height maps (2 cm radius)."""
+    def _knee_contacts(self, data) -> jax.Array:
+        """Whether each knee touches floor or ceiling, checked exactly against the height maps (2 cm radius)."""
         knees = data.xpos[self._calf_bodies]
         low = knees[:, 2] - 0.02 < self.floor_height(knees[:, :2])
         high = knees[:, 2] + 0.02 > self.ceiling_height(knees[:, :2])
-        return jnp.sum(low | high)
+        return low | high
 
     def _penalties(self, data, info, action, qd, collisions) -> dict:
         """Penalty terms shared by all tasks (scales from the task config's `penalties`)."""
@@ -260,25 +267,59 @@ class LeggedEnv(MjxEnv, abc.ABC):
         """The task's PenaltyScales."""
 
     # ----------------------------------------------------------------- observations
-    def _observe(self, data: PhysicsView, info, rng) -> dict:
+    def _observation_parts(self, data: PhysicsView, info) -> tuple[list, list]:
+        """Named pieces of `state` as (name, clean value, noise scale) and of `privileged_state` after the
+        clean `state` as (name, value), in order."""
         noise = self.config.noise
         rot = self.base_rotation(data)
-        gravity = rotate_inv(rot, jnp.array([0.0, 0.0, -1.0]))
         q = self.joint_angles(data) - self._default_pose
         qd = self.joint_velocities(data)
         ext, ext_noise = self._exteroception(data, info)
         cmd = self._command(data, info)
-        parts = [gravity, cmd, q, qd, info["last_action"], ext]
-        scales = [jnp.full(3, noise.gravity), jnp.zeros_like(cmd), jnp.full_like(q, noise.joint_pos),
-                  jnp.full_like(qd, noise.joint_vel), jnp.zeros(self.action_size), ext_noise]
-        clean = jnp.concatenate(parts)
-        state = clean
-        if noise.enabled:
-            state = clean + jnp.concatenate(scales) * jax.random.uniform(rng, clean.shape, minval=-1, maxval=1)
+        state = [("gravity", rotate_inv(rot, jnp.array([0.0, 0.0, -1.0])), jnp.full(3, noise.gravity)),
+                 ("command", cmd, jnp.zeros_like(cmd)),
+                 ("joint_pos", q, jnp.full_like(q, noise.joint_pos)),
+                 ("joint_vel", qd, jnp.full_like(qd, noise.joint_vel)),
+                 ("last_action", info["last_action"], jnp.zeros(self.action_size)),
+                 ("exteroception", ext, ext_noise)]
         dr = info["dr"]
-        lin_vel = rotate_inv(rot, data.qvel[0:3])
-        privileged = jnp.concatenate([
-            clean, lin_vel, data.qvel[3:6], data.contact_force / self._weight,
-            jnp.stack([dr["friction"], dr["base_mass"], dr["kp"], dr["kd"]]), dr["com"], dr["strength"],
-            self._task_privileged(data, info)])
+        privileged = [("base_lin_vel", rotate_inv(rot, data.qvel[0:3])), ("base_ang_vel", data.qvel[3:6]),
+                      ("contact_forces", data.contact_force / self._weight),
+                      ("dynamics", jnp.stack([dr["friction"], dr["base_mass"], dr["kp"], dr["kd"]])),
+                      ("com", dr["com"]), ("motor_strength", dr["strength"]),
+                      ("task", self._task_privileged(data, info))]
+        return state, privileged
+
+    def _observe(self, data: PhysicsView, info, rng) -> dict:
+        state_parts, privileged_parts = self._observation_parts(data, info)
+        clean = jnp.concatenate([v for _, v, _ in state_parts])
+        state = clean
+        if self.config.noise.enabled:
+            scales = jnp.concatenate([n for _, _, n in state_parts])
+            state = clean + scales * jax.random.uniform(rng, clean.shape, minval=-1, maxval=1)
+        privileged = jnp.concatenate([clean] + [v for _, v in privileged_parts])
         return {"state": state, "privileged_state": privileged}
+
+    def observation_layout(self) -> dict:
+        """Named slices of each observation: {"state": [(name, size), ...], "privileged_state": [...]}
+        (the privileged one begins with the clean `state`), traced without compiling."""
+        if self.__dict__.get("_layout") is None:
+            names = {}
+            def sizes(key):
+                view, info, _ = self.spawned_mjx(key)
+                parts, privileged = self._observation_parts(view, info)
+                names["state"] = [n for n, _, _ in parts]
+                names["privileged"] = [n for n, _ in privileged]
+                return [v for _, v, _ in parts], [v for _, v in privileged]
+            shapes = jax.eval_shape(sizes, jax.random.PRNGKey(0))
+            state = []
+            for n, v in zip(names["state"], shapes[0]):
+                size = int(np.prod(v.shape))
+                if n == "command" and len(self.command_names) == size:
+                    state += [(f"command/{c}", 1) for c in self.command_names]
+                else:
+                    state.append((n, size))
+            privileged = [(f"state/{n}", k) for n, k in state]
+            privileged += [(n, int(np.prod(v.shape))) for n, v in zip(names["privileged"], shapes[1])]
+            self._layout = {"state": state, "privileged_state": privileged}
+        return self._layout

@@ -83,6 +83,12 @@ class ConfinedConfig(EnvConfig):
     """Waypoints mode: add target height, roll, pitch and relative yaw to the 2-D command."""
     spawn_yaw: float = 0.3
     """Initial heading is uniform in +-this, radians."""
+    curriculum: bool = True
+    """Each environment starts at the easiest difficulty, moves one level up after a success and one down
+    after an episode that ends short of half its path (legged_gym's terrain curriculum); past the hardest
+    level it draws a level at random. Off: every episode draws a tile uniformly."""
+    only_positive_rewards: bool = True
+    """Clip each step's total reward at 0, so that ending an episode early (a fall) never pays."""
     rewards: ConfinedRewards = ConfinedRewards()
     """Task reward weights."""
     penalties: PenaltyScales = PenaltyScales()
@@ -93,25 +99,37 @@ class ConfinedEnv(LeggedEnv):
     """Go1 in tiled confined worlds, following waypoints (or a goal, or commands) to the goal."""
 
     def __init__(self, config: ConfinedConfig = ConfinedConfig(), robot: RobotSpec = GO1,
-                 terrain: Terrain | None = None, paths: Sequence[np.ndarray] | None = None):
+                 terrain: Terrain | None = None, paths: Sequence[np.ndarray] | None = None, path_capacity: int = 0):
         terrain = terrain or Terrain.generate(config.num_worlds, config.world_seed, config.difficulties, config.world)
         super().__init__(robot, terrain, SceneOptions(), config)
         if paths is None:
             paths = [straight_path(s, g, config.waypoint_spacing) for s, g in zip(terrain.starts, terrain.goals)]
-        path_array, lengths = pad_paths(list(paths), terrain)
+        path_array, lengths = pad_paths(list(paths), terrain, path_capacity)
         self._paths, self._path_len = jnp.asarray(path_array), jnp.asarray(lengths)
         self._starts = jnp.asarray(terrain.starts, jnp.float32)
         self._goals = jnp.asarray(terrain.goals, jnp.float32)
         self._scan_points = jnp.asarray(config.scan.points(), jnp.float32)
+        self._levels = np.unique(terrain.difficulties)
+        self._tile_level = jnp.asarray(np.searchsorted(self._levels, terrain.difficulties), jnp.int32)
 
     @property
     def penalty_scales(self) -> PenaltyScales:
         return self.config.penalties
 
+    @property
+    def command_names(self) -> tuple[str, ...]:
+        mode = self.config.mode
+        if mode in ("waypoints", "goal"):
+            six = mode == "waypoints" and self.config.six_dof_command
+            return ("dx", "dy") + (("dz", "roll", "pitch", "dyaw") if six else ())
+        return ("vx", "vy", "yaw_rate") + (("height", "roll", "pitch") if mode == "skills" else ())
+
     # ----------------------------------------------------------------- read-outs (dashboard, analysis)
     def path_of(self, info) -> tuple[jax.Array, jax.Array]:
-        """Planned waypoints (max_waypoints, 6) of the episode's world and how many of them are valid."""
-        return self._paths[info["tile"]], self._path_len[info["tile"]]
+        """The episode's waypoints (max_waypoints, 6) and how many of them are valid. They live in `info`
+        ('path', 'path_len'; the planned path of the episode's world at its start), so a navigator may hand
+        an episode a new plan between steps (then also setting info['waypoint'])."""
+        return info["path"], info["path_len"]
 
     def scan_world_points(self, data) -> jax.Array:
         """World positions of the floor then the ceiling height-scan points, shape (2, n, 3)."""
@@ -120,20 +138,48 @@ class ConfinedEnv(LeggedEnv):
         return jnp.concatenate([jnp.broadcast_to(xy, (2,) + xy.shape), heights[..., None]], -1)
 
     # ----------------------------------------------------------------- hooks
-    def _task_reset(self, rng):
+    @property
+    def levels(self) -> np.ndarray:
+        """The difficulties present in the terrain, easiest first (curriculum level i plays levels[i])."""
+        return self._levels
+
+    def carry(self, info):
+        """Curriculum: one level up after a success, one down after ending short of half the path."""
+        progress = info["waypoint"] / info["path_len"]
+        level = info["level"] + info["succeeded"].astype(jnp.int32) - (~info["succeeded"] & (progress < 0.5))
+        return {"level": jnp.maximum(level, 0).astype(jnp.int32), "tile": jnp.int32(-1)}
+
+    def _pick_tile(self, rng, carry):
+        """(tile, curriculum level) of a new episode: the carried tile if one is given, else a tile of the
+        carried level (a random level past the hardest, or without curriculum a uniform tile)."""
+        k_level, k_tile = jax.random.split(rng)
+        n_levels = len(self._levels)
+        if carry is None or not self.config.curriculum:
+            level = jnp.int32(0) if self.config.curriculum else jax.random.randint(k_level, (), 0, n_levels)
+        else:
+            level = jnp.where(carry["level"] >= n_levels, jax.random.randint(k_level, (), 0, n_levels), carry["level"])
+        weights = jnp.where(self._tile_level == level, 0.0, -jnp.inf) if self.config.curriculum else \
+            jnp.zeros(self.terrain.num_tiles)
+        tile = jax.random.categorical(k_tile, weights).astype(jnp.int32)
+        if carry is not None:
+            tile = jnp.where(carry["tile"] >= 0, carry["tile"], tile)
+        return tile, self._tile_level[tile]
+
+    def _task_reset(self, rng, carry=None):
         k_tile, k_yaw = jax.random.split(rng)
-        tile = jax.random.randint(k_tile, (), 0, self.terrain.num_tiles)
+        tile, level = self._pick_tile(k_tile, carry)
         start = self._starts[tile]
         z = self.floor_height(start[:2]) + self.robot.standing_height + 0.02
         yaw = jax.random.uniform(k_yaw, minval=-self.config.spawn_yaw, maxval=self.config.spawn_yaw)
-        info = dict(tile=tile, waypoint=jnp.int32(1), goal=self._goals[tile])
+        info = dict(tile=tile, level=level, waypoint=jnp.int32(1), goal=self._goals[tile], succeeded=jnp.bool_(False),
+                    path=self._paths[tile], path_len=self._path_len[tile])
         return jnp.array([start[0], start[1], z]), yaw, info
 
     def _target(self, info) -> jax.Array:
         """Current target pose (x, y, z, roll, pitch, yaw): the goal in goal mode, else the waypoint."""
         if self.config.mode == "goal":
             return jnp.concatenate([info["goal"], jnp.zeros(3)])
-        return self._paths[info["tile"], info["waypoint"]]
+        return info["path"][info["waypoint"]]
 
     def _velocity_command(self, data, info) -> jax.Array:
         """(vx, vy, yaw rate) in the yaw frame that heads for the current target."""
@@ -180,7 +226,7 @@ class ConfinedEnv(LeggedEnv):
         dist = jnp.linalg.norm(to_target)
         goal_dist = jnp.linalg.norm(info["goal"][:2] - base[:2])
         success = goal_dist < cfg.goal_radius
-        last = info["waypoint"] >= self._path_len[info["tile"]] - 1
+        last = info["waypoint"] >= info["path_len"] - 1
         reached = (dist < cfg.waypoint_radius) & ~last & (cfg.mode != "goal")
         speed = jnp.linalg.norm(vel[:2])
         terms = {
@@ -204,7 +250,10 @@ class ConfinedEnv(LeggedEnv):
                        + jnp.square(target[3] - roll) + jnp.square(target[4] - pitch))
                 terms["tracking_pose"] = w.tracking_pose * tracking(err, 0.02)
         info["waypoint"] = jnp.where(reached, info["waypoint"] + 1, info["waypoint"])
+        info["succeeded"] = success
         metrics = {
+            "curriculum_level": info["level"].astype(jnp.float32),
+            "path_progress": info["waypoint"] / info["path_len"],
             "success": success.astype(jnp.float32),
             "time_to_goal_s": jnp.where(success, info["step"] * self.dt, 0.0),
             "final_distance_m": goal_dist,

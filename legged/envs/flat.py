@@ -61,7 +61,11 @@ class FlatEnv(LeggedEnv):
     def penalty_scales(self) -> PenaltyScales:
         return self.config.penalties
 
-    def _task_reset(self, rng):
+    @property
+    def command_names(self) -> tuple[str, ...]:
+        return ("vx", "vy", "yaw_rate")
+
+    def _task_reset(self, rng, carry=None):
         c = self.config
         k = jax.random.split(rng, 4)
         cmd = jnp.stack([jax.random.uniform(k[i], minval=r[0], maxval=r[1])

@@ -153,44 +153,51 @@ class NativeEnvs:
     def __init__(self, env, num_envs: int, threads: int | None = None, cameras: bool = False):
         self.env, self.num_envs = env, num_envs
         self.physics = NativePhysics(env, num_envs, threads, cameras)
-        def spawn(keys):  # split as MjxEnv.reset splits its key
+        def spawn(keys, carry):  # split as MjxEnv.reset splits its key
             split = jax.vmap(jax.random.split)(keys)
-            return jax.vmap(env.spawn)(split[:, 0]), split[:, 1]
+            return jax.vmap(env.spawn)(split[:, 0], carry), split[:, 1]
 
         self._spawn = jax.jit(spawn)
+        self._carry = jax.jit(jax.vmap(env.carry))
         self._first = jax.jit(jax.vmap(env.start_episode))
         self._prepare = jax.jit(lambda state, action, *args: jax.vmap(lambda s, a: env.prepare(s, a, *args))(state, action))
         self._transition = jax.jit(jax.vmap(env.advance))
         self._warm = False
 
-    def spawn(self, keys: jax.Array):
+    def spawn(self, keys: jax.Array, carry: dict | None = None):
         """(Spawns, observation keys) for reset keys (one per environment), split as MjxEnv.reset does."""
-        return self._spawn(keys)
+        return self._spawn(keys, carry)
 
-    def reset(self, keys: jax.Array, ids: np.ndarray | None = None, state: State | None = None) -> State:
+    def reset(self, keys: jax.Array, ids: np.ndarray | None = None, state: State | None = None,
+              carry: dict | None = None) -> State:
         """Start new episodes from reset `keys` [num_envs] in environments `ids` (all by default); with
-        `state`, the others keep theirs. The same keys give the same first states as MJX's `reset`."""
+        `state`, the others keep theirs and the new episodes inherit `env.carry` of the ones in `state`
+        (else `carry`, batched, or nothing). The same keys give the same first states as MJX's `reset`."""
         every = state is None or ids is None
         ids = np.arange(self.num_envs) if every else np.asarray(ids)
+        if state is not None and carry is None:
+            carry = self._carry(state.info)
         few = min(self.num_envs, max(16, self.num_envs // 8))  # one compiled size for a few resets
         if every or len(ids) > few:
-            spawn, k_obs = self.spawn(keys)
+            spawn, k_obs = self.spawn(keys, carry)
             rows = lambda x: np.asarray(x)[ids]
             fields = self.env.native_model_fields(spawn.info, ids)
             view = self.physics.load(ids, rows(spawn.qpos), rows(spawn.qvel), rows(spawn.ctrl), fields)
             fresh = self._first(as_view(view, np.zeros(self.num_envs, bool)), spawn.info, k_obs)
             if every:
-                if not self._warm and self.num_envs > 1:  # compile both partial-reset paths now, not mid-run:
-                    self._warm = True  # restarting environments from their own keys changes nothing
+                if not self._warm and self.num_envs > 1:  # compile both partial-reset paths now, not mid-run,
+                    self._warm = True  # then put back the physics of the episodes they restarted
                     self.reset(keys, np.arange(1), fresh)
                     self.reset(keys, np.arange(min(few + 1, self.num_envs)), fresh)
+                    self.load(fresh)
                 return fresh
             mask = np.zeros(self.num_envs, bool)
             mask[ids] = True
             return _select_rows(jnp.asarray(mask), fresh, state)
         # a few environments: spawn and observe only those, in a sub-batch of one fixed size (padded)
         rows = np.concatenate([ids, np.full(few - len(ids), ids[0])])
-        spawn, k_obs = self.spawn(keys[jnp.asarray(rows)])
+        pick = jnp.asarray(rows)
+        spawn, k_obs = self.spawn(keys[pick], jax.tree_util.tree_map(lambda x: x[pick], carry))
         own = lambda x: np.asarray(x)[:len(ids)]
         fields = self.env.native_model_fields(spawn.info, np.arange(len(ids)))
         view = self.physics.load(ids, own(spawn.qpos), own(spawn.qvel), own(spawn.ctrl), fields)

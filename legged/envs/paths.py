@@ -16,11 +16,12 @@ def straight_path(start, goal, spacing: float) -> np.ndarray:
     return np.concatenate([xyz, np.zeros((n, 2)), np.full((n, 1), yaw)], 1)
 
 
-def pad_paths(paths: list[np.ndarray], terrain: Terrain) -> tuple[np.ndarray, np.ndarray]:
-    """Stack one path per terrain tile into (n_tiles, max_len, 6) plus lengths; checks end points."""
+def pad_paths(paths: list[np.ndarray], terrain: Terrain, capacity: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Stack one path per terrain tile into (n_tiles, max(longest, capacity), 6) plus lengths; checks end
+    points. `capacity` leaves room for longer paths handed in later (replans)."""
     if len(paths) != terrain.num_tiles:
         raise ValueError(f"got {len(paths)} waypoint paths for a terrain of {terrain.num_tiles} worlds")
-    longest = max(len(p) for p in paths)
+    longest = max(max(len(p) for p in paths), capacity)
     out = np.zeros((len(paths), longest, 6), np.float32)
     for k, p in enumerate(paths):
         p = np.asarray(p, np.float32)

@@ -76,6 +76,10 @@ PHYSICS = ("mjx", "native")
 class VectorEnv:
     """`num_envs` copies of `env` with batched reset and auto-resetting step, on either physics engine.
 
+    `reset(key, carry=None)` starts every environment (`carry`, batched: what each first episode is given,
+    see MjxEnv.spawn); `step(batch, action)` steps them and restarts the ones that ended, each new episode
+    inheriting `env.carry` of the one before.
+
     physics="mjx": everything jitted in JAX (`env.reset`/`env.step` vmapped). physics="native": MuJoCo's C
     engine (legged.envs.native) steps the physics on `threads` threads, the same task verbs in JAX do the
     rest. Build it with `VectorEnv.of(env, num_envs, ...)` to reuse the compiled functions of an earlier one.
@@ -113,9 +117,9 @@ class VectorEnv:
         sums.update(**{"return": jnp.zeros(self.num_envs), "length": jnp.zeros(self.num_envs)})
         return sums
 
-    def _reset(self, key: jax.Array) -> Batch:
+    def _reset(self, key: jax.Array, carry: dict | None = None) -> Batch:
         keys = jax.random.split(key, self.num_envs + 1)
-        state = jax.vmap(self.env.reset)(keys[1:])
+        state = jax.vmap(self.env.reset)(keys[1:], carry)
         return Batch(state=state, keys=jax.random.split(keys[0], self.num_envs), sums=self._zero_sums(state))
 
     def _step(self, batch: Batch, action: jax.Array, *env_args) -> tuple[Batch, StepResult]:
@@ -123,14 +127,15 @@ class VectorEnv:
         nxt = jax.vmap(lambda s, a: self.env.step(s, a, *env_args))(batch.state, action)
         sums, finished, done, time_out = account(batch.sums, nxt)
         split = jax.vmap(jax.random.split)(batch.keys)
-        fresh = jax.lax.cond(done.any(), lambda: jax.vmap(self.env.reset)(split[:, 0]), lambda: nxt)
+        carry = jax.vmap(self.env.carry)(nxt.info)
+        fresh = jax.lax.cond(done.any(), lambda: jax.vmap(self.env.reset)(split[:, 0], carry), lambda: nxt)
         state = select_envs(done, fresh, nxt)
         result = StepResult(obs=state.obs, reward=nxt.reward, done=done, time_out=time_out, finished=finished)
         return Batch(state=state, keys=split[:, 1], sums=sums), result
 
-    def _native_reset(self, key: jax.Array) -> Batch:
+    def _native_reset(self, key: jax.Array, carry: dict | None = None) -> Batch:
         keys = jax.random.split(key, self.num_envs + 1)
-        state = self.native.reset(keys[1:])
+        state = self.native.reset(keys[1:], carry=carry)
         return Batch(state=state, keys=jax.random.split(keys[0], self.num_envs), sums=self._zero(state))
 
     def _native_step(self, batch: Batch, action: jax.Array, *env_args) -> tuple[Batch, StepResult]:

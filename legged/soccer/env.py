@@ -62,7 +62,7 @@ class SoccerEnv(MjxEnv):
         self.camera = soccer_camera(m, config.camera, layout) if config.vision else None
 
     # ----------------------------------------------------------------- engine verbs (reset, step: MjxEnv)
-    def spawn(self, rng: jax.Array) -> Spawn:
+    def spawn(self, rng: jax.Array, carry: dict | None = None) -> Spawn:
         """A new game: robots around their kick-off spots, the ball on the pitch (see SoccerConfig)."""
         rng, k_start = jax.random.split(rng)
         qpos, qvel = self.start_state(k_start)

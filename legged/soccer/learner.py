@@ -42,8 +42,8 @@ class LearnerView(MjxEnv):
         return render(self._camera, data)["rgb"][LEARNER]
 
     # ----------------------------------------------------------------- engine verbs (reset, step: MjxEnv)
-    def spawn(self, rng: jax.Array) -> Spawn:
-        return self.game.spawn(rng)
+    def spawn(self, rng: jax.Array, carry: dict | None = None) -> Spawn:
+        return self.game.spawn(rng, carry)
 
     def first_state(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
         return self._view(self.game.first_state(view, info, rng))

@@ -88,6 +88,12 @@ def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneO
         ET.SubElement(worldbody, "geom", name=FLOOR_GEOM, type="plane", size="0 0 0.05", material="grid",
                       group=str(TERRAIN_GROUP), contype="0", conaffinity="0")
     else:
+        # MuJoCo 3.17's native convex collider gives a foot sphere on a height field contacts on the walls
+        # between the field's triangular prisms (horizontal normals, 2 cm deep): the feet wedge and the robot
+        # sinks. libccd gives the right, upward contacts (tests/test_physics_terrain.py checks it).
+        option = root.find("option") if root.find("option") is not None else ET.SubElement(root, "option")
+        flag = option.find("flag") if option.find("flag") is not None else ET.SubElement(option, "flag")
+        flag.set("nativeccd", "disable")
         _add_hfield(asset, worldbody, FLOOR_GEOM, terrain.floor, centre, None, False, "0.55 0.5 0.45 1", res)
         top = float(terrain.ceiling_top)
         depth = (top - terrain.ceiling)[:, ::-1]  # depth below `top`; 180 deg about x mirrors y

@@ -1,0 +1,280 @@
+"""The command line's planning and navigation commands: `legged world`, `plan`, `navigate`, `bench plan`."""
+
+from __future__ import annotations
+
+import json
+
+from legged.cli_args import SEED, add_physics_options, bounded, ints, xyz
+
+
+def _print_records(records: list[dict], as_json: bool, print_table) -> int:
+    """Benchmark output: a JSON list, or the benchmark's own table."""
+    if as_json:
+        print(json.dumps(records))
+    else:
+        print_table(records)
+    return 0
+
+
+def cmd_world(args) -> int:
+    from legged.robots import GO1
+    from legged.worlds import generate_world, write_world
+
+    world = generate_world(args.seed, args.difficulty)
+    files = write_world(world, GO1, args.out)
+    summary = dict(world.summary(), files=files)
+    print(json.dumps(summary) if args.json else
+          f"world seed={world.seed} difficulty={world.difficulty} size={summary['size_m']} m "
+          f"min clearance={summary['min_clearance_m']} m\n  start={summary['start']} goal={summary['goal']}\n"
+          f"  wrote {files['npz']} and {files['xml']}")
+    return 0
+
+
+def _planner_config(args):
+    from planners import PlannerConfig
+
+    config = PlannerConfig(planner=args.planner, time_limit=args.time_limit, seed=args.planner_seed,
+                           spacing=args.spacing, space=args.space)
+    config.validate()
+    return config
+
+
+def _scene_maps(args):
+    """Height maps sampled from a user's MJCF scene (errors name the file and the cause)."""
+    from pathlib import Path
+
+    import mujoco
+
+    from planners import maps_from_scene, reference_between
+
+    if args.start is None or args.goal is None:
+        raise ValueError("--scene needs --start X,Y,Z and --goal X,Y,Z (body centre, metres)")
+    path = Path(args.scene)
+    if not path.is_file():
+        raise FileNotFoundError(f"scene file not found: {path}")
+    try:
+        model = mujoco.MjModel.from_xml_path(str(path))
+    except ValueError as exc:
+        raise ValueError(f"cannot load scene {path}: {exc}") from None
+    return maps_from_scene(model, reference_between(args.start, args.goal), args.resolution)
+
+
+def cmd_plan(args) -> int:
+    import numpy as np
+
+    from planners import HeightMaps, plan_path
+    from legged.robots import GO1
+    from legged.worlds import generate_world
+
+    config = _planner_config(args)  # bad settings fail before any sampling
+    if args.scene:
+        maps, start, goal = _scene_maps(args), np.array(args.start), np.array(args.goal)
+    else:
+        world = generate_world(args.seed, args.difficulty)
+        maps = HeightMaps.from_world(world)
+        start = np.array(args.start) if args.start else world.start
+        goal = np.array(args.goal) if args.goal else world.goal
+    plan = plan_path(maps, start, goal, GO1, config)
+    if args.json:
+        print(json.dumps(plan.to_json()))
+    else:
+        print(f"{plan.planner}: {len(plan.waypoints)} waypoints, {plan.length_m:.3f} m, planned in "
+              f"{plan.plan_time_s:.3f} s\n  x y z roll pitch yaw:")
+        for pose in plan.waypoints:
+            print("  " + " ".join(f"{v:7.3f}" for v in pose))
+    return 0
+
+
+def cmd_bench_plan(args) -> int:
+    from planners.bench import PREVIOUS_PLANNER, bench_narrow, bench_planner, print_table
+
+    if args.narrow:
+        report = bench_narrow({"current": _planner_config(args), "previous": PREVIOUS_PLANNER},
+                              progress=not args.quiet)
+        if args.json:
+            print(json.dumps(report))
+        else:
+            for r in report["scenes"]:
+                print(f"{r['scene']:>20} {r['config']:>8} {'solved' if r['solved'] else 'FAILED':>7} {r['time_s']:7.3f} s")
+            for label, summary in report["summary"].items():
+                print(f"{label}: {summary['solved']}/{summary['scenes']} solved, median {summary['median_time_s']} s")
+        return 0
+    records = bench_planner(args.difficulties, args.worlds, _planner_config(args), args.first_seed,
+                            progress=not args.quiet)
+    return _print_records(records, args.json, print_table)
+
+
+def _add_planner_options(parser) -> None:
+    from planners import PLANNERS
+
+    parser.add_argument("--planner", default="auto",
+                        help="auto (RRTConnect for 60 motion checks, then the complete lattice search), lattice, or an OMPL "
+                             f"planner: {', '.join(PLANNERS)} (RRT*, BIT* style names work too)")
+    parser.add_argument("--space", choices=["projected", "full"], default="projected",
+                        help="projected: search x, y, yaw with body height, roll and pitch derived from the gap "
+                             "(default); full: sample all six (the earlier planner)")
+    parser.add_argument("--time-limit", type=bounded(float, 0.0, 3600.0), default=5.0,
+                        help="seconds an OMPL planner may search")
+    parser.add_argument("--spacing", type=bounded(float, 0.01, 10.0), default=0.5,
+                        help="largest distance between waypoints, m")
+    parser.add_argument("--planner-seed", type=SEED, default=0, help="seed of OMPL's sampling")
+
+
+SHIPPED_FOLLOWER = "assets/policies/go1-confined-follower"
+"""The waypoint follower that ships with the project (navigate's and the demo's default policy)."""
+
+
+def cmd_navigate(args) -> int:
+    import numpy as np
+
+    from policies.navigate import Unreachable, load_follower, navigate
+    from legged.worlds import generate_world
+
+    policy_dir = shipped_policy(args.policy)
+    load_follower(policy_dir)  # a policy of another task fails before any sampling or planning
+    if args.scene:
+        maps, start, goal = _scene_maps(args), np.array(args.start), np.array(args.goal)
+        where = {"scene": args.scene}
+    else:
+        if args.start is not None or args.goal is not None:
+            raise ValueError("--start and --goal go with --scene; a generated world (--seed, --difficulty) has its own")
+        world = generate_world(args.seed, args.difficulty)
+        maps, start, goal = world, world.start, world.goal
+        where = {"world_seed": args.seed, "difficulty": args.difficulty}
+    recording = NavigationRecording() if (args.view or args.record) else None
+    if args.view:
+        from web.source import check_port
+
+        check_port(args.host, args.port)  # fail before the work
+    try:
+        report = navigate(policy_dir, maps, start, goal, args.physics, args.threads or None,
+                          planner=_planner_config(args), seed=args.seed,
+                          on_step=None if recording is None else recording.add)
+    except Unreachable as exc:
+        print(json.dumps(dict(where, success=False, reachable=False, error=str(exc))) if args.json
+              else f"legged navigate: {exc}")
+        return 1
+    report = dict(where, start=[round(float(v), 4) for v in start[:3]], goal=[round(float(v), 4) for v in goal[:3]],
+                  **report)
+    print(json.dumps(report) if args.json else json.dumps(report, indent=2))
+    if recording is not None:
+        traj = recording.trajectory(dict(report, task="navigation"))
+        if args.record:
+            print(f"[navigate] wrote {traj.save(args.record)}; play it with: legged view --trajectory {args.record}",
+                  flush=True)
+        if args.view:
+            from web.app import Dashboard, DashboardConfig
+
+            dashboard = Dashboard(DashboardConfig(host=args.host, port=args.port), trajectory=traj)
+            print(f"[navigate] dashboard at {dashboard.start()} (Ctrl-C stops it)", flush=True)
+            dashboard.wait()
+    return 0 if report["success"] else 1
+
+
+class NavigationRecording:
+    """Collects a navigation's frames (via `navigate(on_step=...)`) into a dashboard trajectory with its replans."""
+
+    def __init__(self):
+        self.frames, self.plans, self.env = [], [], None
+
+    def add(self, env, state, plan) -> None:
+        """One frame of environment 0; a plan not seen before is a replan from this frame on."""
+        import numpy as np
+
+        self.env = env
+        if not self.plans or self.plans[-1][1] is not plan:
+            self.plans.append((len(self.frames), plan))
+        self.frames.append({"qpos": np.asarray(state.pipeline_state.qpos[0], np.float32),
+                            "reward": float(state.reward[0]), "waypoint": int(state.info["waypoint"][0]),
+                            "metrics": {k: float(v[0]) for k, v in state.metrics.items()}})
+
+    def trajectory(self, info: dict):
+        """The recorded navigation as a web.trajectory.Trajectory (one environment)."""
+        import numpy as np
+
+        from web.trajectory import Trajectory
+
+        width = max(len(p.waypoints) for _, p in self.plans)
+        padded = lambda w: np.concatenate([w, np.repeat(w[-1:], width - len(w), 0)]).astype(np.float32)
+        first, later = self.plans[0][1], self.plans[1:]
+        column = lambda key: np.array([f[key] for f in self.frames])[:, None]
+        info = {k: v for k, v in info.items() if isinstance(v, (str, int, float, bool, type(None), list))}
+        return Trajectory(
+            model=self.env.mj_model, dt=float(self.env.dt), qpos=np.stack([f["qpos"] for f in self.frames])[:, None],
+            reward=column("reward").astype(np.float32), done=np.zeros((len(self.frames), 1), bool),
+            metrics={k: np.array([f["metrics"][k] for f in self.frames], np.float32)[:, None]
+                     for k in self.frames[0]["metrics"]},
+            offsets=np.zeros((1, 3)), info=info, paths=padded(first.waypoints)[None],
+            path_len=np.array([len(first.waypoints)]), waypoint=column("waypoint").astype(np.int32),
+            goal=np.asarray(first.waypoints[-1:, :3], np.float32),
+            replans=np.stack([padded(p.waypoints) for _, p in later]) if later else None,
+            replan_len=np.array([len(p.waypoints) for _, p in later]) if later else None,
+            replan_frame=np.array([f for f, _ in later]) if later else None)
+
+
+def shipped_policy(policy: str | None) -> str:
+    """The policy run directory to use: `policy`, else the shipped follower (a clear error if it is absent)."""
+    from pathlib import Path
+
+    if policy:
+        return policy
+    for base in (Path.cwd(), Path(__file__).resolve().parent.parent):
+        if (base / SHIPPED_FOLLOWER / "config.yaml").is_file():
+            return str(base / SHIPPED_FOLLOWER)
+    raise FileNotFoundError(f"no shipped follower at {SHIPPED_FOLLOWER}; pass --policy RUN (a confined-waypoints run)")
+
+
+def add_navigation_commands(sub) -> None:
+    """The `world`, `plan` and `navigate` sub-commands."""
+    w = sub.add_parser("world", help="generate a confined world (world.npz + world.xml)")
+    w.add_argument("--seed", type=SEED, default=0)
+    w.add_argument("--difficulty", type=bounded(int, 0, 20), default=0, help="0/1/2 give 3/4/5 m tunnels; higher is longer")
+    w.add_argument("--out", required=True, help="output directory")
+    w.add_argument("--json", action="store_true", help="print a JSON summary")
+    w.set_defaults(fn=cmd_world)
+
+    pl = sub.add_parser("plan", help="plan body-pose waypoints through a generated world or an MJCF scene")
+    pl.add_argument("--seed", type=SEED, default=0, help="seed of the generated world")
+    pl.add_argument("--difficulty", type=bounded(int, 0, 20), default=0)
+    pl.add_argument("--scene", default=None, help="plan through this MJCF scene instead (needs --start, --goal)")
+    pl.add_argument("--start", type=xyz, default=None, help="body centre X,Y,Z (default: the world's start)")
+    pl.add_argument("--goal", type=xyz, default=None, help="body centre X,Y,Z (default: the world's goal)")
+    pl.add_argument("--resolution", type=bounded(float, 0.005, 1.0), default=0.025,
+                    help="map resolution when sampling --scene, m (the maps are widened by one cell to be safe)")
+    _add_planner_options(pl)
+    pl.add_argument("--json", action="store_true",
+                    help="print one JSON object: waypoints [x, y, z, roll, pitch, yaw], length_m, plan_time_s, planner")
+    pl.set_defaults(fn=cmd_plan)
+
+    nv = sub.add_parser("navigate", help="plan, follow with a trained waypoint follower, replan when straying")
+    nv.add_argument("--scene", default=None, help="MJCF scene to navigate (else a generated world)")
+    nv.add_argument("--start", type=xyz, default=None, help="with --scene: start body centre X,Y,Z")
+    nv.add_argument("--goal", type=xyz, default=None, help="with --scene: goal body centre X,Y,Z")
+    nv.add_argument("--resolution", type=bounded(float, 0.005, 1.0), default=0.025, help="map resolution of --scene, m")
+    nv.add_argument("--seed", type=SEED, default=0, help="world seed (without --scene) and episode seed")
+    nv.add_argument("--difficulty", type=bounded(int, 0, 20), default=0, help="generated world's level")
+    nv.add_argument("--policy", default=None, help=f"a waypoint-follower run (default: {SHIPPED_FOLLOWER})")
+    add_physics_options(nv, "native")
+    _add_planner_options(nv)
+    nv.add_argument("--view", action="store_true", help="afterwards, show the navigation and its replans in the dashboard")
+    nv.add_argument("--record", default=None, metavar="FILE", help="save the navigation as a trajectory (.npz)")
+    nv.add_argument("--host", default="127.0.0.1", help="dashboard address (with --view)")
+    nv.add_argument("--port", type=bounded(int, 0, 65535), default=8080, help="dashboard port (with --view)")
+    nv.add_argument("--json", action="store_true", help="one-line JSON")
+    nv.set_defaults(fn=cmd_navigate)
+
+
+
+def add_bench_plan(bsub) -> None:
+    """The `bench plan` sub-command."""
+    bp = bsub.add_parser("plan", help="planning time and path length per difficulty over generated worlds")
+    bp.add_argument("--difficulties", type=ints(0, 20), default=[0, 1, 2], help="comma-separated levels")
+    bp.add_argument("--worlds", type=bounded(int, 1, 10000), default=20, help="worlds per difficulty (seeds first-seed onward)")
+    bp.add_argument("--first-seed", type=SEED, default=0)
+    bp.add_argument("--narrow", action="store_true",
+                    help="instead: the fixed narrow-passage scenes (low bars, side gaps), beside the previous planner")
+    _add_planner_options(bp)
+    bp.add_argument("--json", action="store_true", help="print a JSON list, one object per difficulty")
+    bp.add_argument("--quiet", action="store_true", help="no progress bars")
+    bp.set_defaults(fn=cmd_bench_plan)
+

@@ -1,0 +1,87 @@
+"""A fixed set of narrow-passage scenes for the planner benchmark, written as MJCF as a user would write them.
+
+Every scene is a box tunnel (1 m wide inside, 4 m long, roof 0.6 m up) sampled by `maps_from_scene`:
+- `bar-<band>mm`: a bar across the tunnel whose underside leaves a band of feasible body heights
+  `band` millimetres wide above the robot's lowest crouch;
+- `gap-<width>cm`: a block from one side wall leaving a gap `width` centimetres wide at the other;
+- `bar-gap-<band>mm-<width>cm`: both, one after the other.
+Bands and gaps are computed from the robot's body box, margin and leg reach, so the scenes stay narrow
+for the robot the planner is given.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from legged.robots.spec import RobotSpec
+from planners.body_check import BodyCheckConfig
+
+TUNNEL_HALF_WIDTH = 0.5
+"""Half the inside width of every scene's tunnel, metres."""
+START = (-1.5, 0.0)
+"""Start x, y of every scene (the goal mirrors it)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class NarrowScene:
+    """One benchmark scene: its name, MJCF text, and start and goal body positions."""
+
+    name: str
+    """What is narrow and by how much."""
+    xml: str
+    """Standalone MJCF."""
+    start: tuple[float, float, float]
+    """Start body centre x, y, z."""
+    goal: tuple[float, float, float]
+    """Goal body centre x, y, z."""
+
+
+def _box(name: str, centre, half) -> str:
+    pos = " ".join(f"{v:.4f}" for v in centre)
+    size = " ".join(f"{v:.4f}" for v in half)
+    return f'    <geom name="{name}" type="box" pos="{pos}" size="{size}"/>'
+
+
+def tunnel_xml(extra: list[str]) -> str:
+    """A closed 4 m box tunnel, 1 m wide and 0.6 m high inside, plus `extra` geoms."""
+    w = TUNNEL_HALF_WIDTH
+    geoms = [_box("ground", (0, 0, -0.05), (2.5, w + 0.1, 0.05)),
+             _box("wall_left", (0, w + 0.05, 0.35), (2.5, 0.05, 0.35)),
+             _box("wall_right", (0, -w - 0.05, 0.35), (2.5, 0.05, 0.35)),
+             _box("end_back", (-2.05, 0, 0.35), (0.05, w, 0.35)),
+             _box("end_front", (2.05, 0, 0.35), (0.05, w, 0.35)),
+             _box("roof", (0, 0, 0.65), (2.5, w + 0.1, 0.05))] + extra
+    return "<mujoco model=\"narrow\">\n  <worldbody>\n" + "\n".join(geoms) + "\n  </worldbody>\n</mujoco>\n"
+
+
+def bar(robot: RobotSpec, band: float, x: float, body: BodyCheckConfig = BodyCheckConfig()) -> str:
+    """A 0.3 m deep bar across the tunnel at x whose underside leaves a `band` of body heights above the
+    lowest crouch (the body's top plus margin must pass under it)."""
+    top = robot.body_box_half_extents[2] + body.margin
+    underside = robot.body_height_range[0] + top + band
+    return _box(f"bar_{x:+.1f}", (x, 0, underside + 0.1), (0.15, TUNNEL_HALF_WIDTH, 0.1))
+
+
+def block(robot: RobotSpec, gap: float, x: float, side: float = 1.0) -> str:
+    """A 0.3 m deep block from one side wall leaving a `gap`-wide opening at the other."""
+    length = 2 * TUNNEL_HALF_WIDTH - gap
+    y = side * (TUNNEL_HALF_WIDTH - length / 2)
+    return _box(f"block_{x:+.1f}", (x, y, 0.3), (0.15, length / 2, 0.3))
+
+
+def narrow_scenes(robot: RobotSpec) -> list[NarrowScene]:
+    """The benchmark's fixed scenes for `robot` (bands 20 to 1 mm, gaps 45 to 35 cm, and combinations)."""
+    z = sum(robot.body_height_range) / 2
+    start, goal = (START[0], START[1], z), (-START[0], START[1], z)
+    scenes = []
+    for band in (0.02, 0.01, 0.005, 0.003, 0.001):
+        scenes.append(NarrowScene(f"bar-{band * 1000:g}mm", tunnel_xml([bar(robot, band, 0.0)]), start, goal))
+    for gap in (0.45, 0.40, 0.35):
+        scenes.append(NarrowScene(f"gap-{gap * 100:g}cm", tunnel_xml([block(robot, gap, 0.0)]), start, goal))
+    for gap in (0.40, 0.35):
+        zigzag = [block(robot, gap, -0.5, 1.0), block(robot, gap, 0.5, -1.0)]
+        scenes.append(NarrowScene(f"zigzag-{gap * 100:g}cm", tunnel_xml(zigzag), start, goal))
+    for band, gap in ((0.005, 0.40), (0.003, 0.35)):
+        both = [bar(robot, band, -0.5), block(robot, gap, 0.6)]
+        scenes.append(NarrowScene(f"bar-gap-{band * 1000:g}mm-{gap * 100:g}cm", tunnel_xml(both), start, goal))
+    return scenes

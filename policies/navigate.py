@@ -1,0 +1,174 @@
+"""`legged navigate`: plan through a world or a user's scene, follow the plan with a trained waypoint
+follower, and replan when the robot strays from it (PAPERS.md section 1's hierarchy, end to end).
+
+The robot walks in the height-map realisation of the scene (the maps the planner plans on, as MuJoCo
+height fields), in MJX or native MuJoCo. A replan starts from the robot's measured pose (moved to the
+nearest valid body pose, planners.body_planner.replan) and is handed to the running episode in its
+`info` (ConfinedEnv keeps the path there), so nothing is recompiled.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from legged.envs.confined import ConfinedEnv
+from legged.envs.vector import VectorEnv
+from legged.tasks import task_entry
+from legged.worlds.maps import HeightMaps
+from legged.worlds.terrain import Terrain
+from planners.body_planner import PlannerConfig, PlanningError, plan_path, replan
+from policies.policy_io import actor_observation, load_policy
+from policies.run_dir import RunDirError, check_compatible
+
+PATH_CAPACITY = 256
+"""Most waypoints a (re)planned path may have in a navigation episode."""
+
+
+class NavigationError(ValueError):
+    """Navigation cannot start: the policy does not follow waypoints, or the start or goal is unusable."""
+
+
+class Unreachable(NavigationError):
+    """No path leads from the start to the goal (an outcome to report, not a mistake in the input)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class NavigateConfig:
+    """When a navigation replans and gives up."""
+
+    stray_distance: float = 0.4
+    """Replan when the body centre is farther than this from the rest of the planned path, metres."""
+    stall_seconds: float = 4.0
+    """... or when no new waypoint was reached for this long, seconds."""
+    max_replans: int = 20
+    """Replans allowed in one navigation."""
+    seconds_per_metre: float = 5.0
+    """Time limit: 20 s plus this per metre of the first plan."""
+
+
+def _distance_to_path(xy: np.ndarray, path: np.ndarray) -> float:
+    """Horizontal distance from a point to a polyline (n, >= 2)."""
+    a, b = path[:-1, :2], path[1:, :2]
+    ab = b - a
+    t = np.clip(np.sum((xy - a) * ab, 1) / np.maximum(np.sum(ab * ab, 1), 1e-12), 0.0, 1.0)
+    return float(np.min(np.linalg.norm(a + t[:, None] * ab - xy, axis=1))) if len(a) else float(np.linalg.norm(xy - path[0, :2]))
+
+
+def _pose_of(qpos: np.ndarray) -> np.ndarray:
+    """Body pose x, y, z, roll, pitch, yaw from a free joint's qpos (w, x, y, z quaternion)."""
+    w, x, y, z = qpos[3:7]
+    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return np.array([qpos[0], qpos[1], qpos[2], roll, pitch, yaw])
+
+
+def terrain_of(maps: HeightMaps, start, goal) -> Terrain:
+    """A one-world terrain holding `maps` with its start and goal."""
+    if isinstance(maps, Terrain):
+        return maps
+    return Terrain(floor=np.asarray(maps.floor, np.float32), ceiling=np.asarray(maps.ceiling, np.float32),
+                   resolution=maps.resolution, origin=np.asarray(maps.origin, float),
+                   starts=np.asarray([start[:3]], float), goals=np.asarray([goal[:3]], float),
+                   difficulties=np.array([0]), ceiling_top=float(np.max(maps.ceiling)), source="navigation scene")
+
+
+def load_follower(run_dir):
+    """(policy, run config) of a waypoint follower; NavigationError if the run learned another task."""
+    from policies.run_dir import RunDir
+
+    config = RunDir(run_dir).load_config()  # the task is checked before any checkpoint is read
+    entry = task_entry(config.task)
+    if entry.kind != "confined" or getattr(config.env, "mode", "") == "goal":
+        raise NavigationError(f"{run_dir} was trained on {config.task}, which does not follow waypoints; it needs "
+                              "a confined-waypoints (or confined-velocity / confined-skills) run")
+    return load_policy(run_dir)
+
+
+def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", threads: int | None = None,
+             config: NavigateConfig = NavigateConfig(), planner: PlannerConfig = PlannerConfig(), seed: int = 0,
+             on_step=None) -> dict:
+    """Plan from start to goal, follow with the run's policy, replan on straying; the outcome as a dict.
+    `on_step(env, state, plan)` is called at the start and after every control step but the last (viewers). Raises NavigationError (the
+    policy cannot navigate, or the start or goal is unusable; Unreachable when no path exists) before any
+    compilation."""
+    policy, run_config = load_follower(run_dir)
+    robot = task_entry(run_config.task).robot
+    start, goal = np.asarray(start, float), np.asarray(goal, float)
+    try:
+        plan = plan_path(maps, start, goal, robot, planner)
+    except PlanningError as exc:
+        if "no collision-free path" in str(exc):
+            raise Unreachable(f"the goal cannot be reached: {exc}") from None
+        raise NavigationError(str(exc)) from None  # a start or goal where the robot does not fit
+    first_plan = plan
+    time_limit = 20.0 + config.seconds_per_metre * plan.length_m
+    env_config = dataclasses.replace(run_config.env, num_worlds=1, curriculum=False, spawn_yaw=0.0,
+                                     episode_seconds=time_limit)
+    env = ConfinedEnv(env_config, robot, terrain_of(maps, start, goal),
+                      [plan.waypoints], path_capacity=PATH_CAPACITY)
+    try:
+        check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+    except RunDirError as exc:
+        raise NavigationError(str(exc)) from None
+    vector = VectorEnv(env, 1, physics, threads)
+    batch = vector.reset(jax.random.PRNGKey(seed), {"level": np.zeros(1, np.int32), "tile": np.zeros(1, np.int32)})
+    if on_step is not None:
+        on_step(env, batch.state, plan)
+    obs, replans, failed_replans, walked = batch.state.obs, 0, 0, 0.0
+    last_waypoint, last_progress_step, steps = 1, 0, 0
+    position = np.asarray(batch.state.pipeline_state.qpos)[0, :3]
+    while True:
+        batch, result = vector.step(batch, jnp.asarray(policy.act(actor_observation(obs))))
+        obs, steps = result.obs, steps + 1
+        if bool(result.done[0]):
+            final = {k: float(np.asarray(v)[0]) for k, v in result.finished.items()}
+            break
+        info = batch.state.info
+        qpos = np.asarray(batch.state.pipeline_state.qpos)[0]
+        walked += float(np.linalg.norm(qpos[:2] - position[:2]))
+        position = qpos[:3]
+        waypoint = int(info["waypoint"][0])
+        if waypoint != last_waypoint:
+            last_waypoint, last_progress_step = waypoint, steps
+        path = np.asarray(info["path"][0])[:int(info["path_len"][0])]
+        stray = _distance_to_path(qpos[:2], path[max(waypoint - 1, 0):]) > config.stray_distance
+        stalled = (steps - last_progress_step) * env.dt > config.stall_seconds
+        if (stray or stalled) and replans + failed_replans < config.max_replans:
+            try:
+                plan = replan(maps, _pose_of(qpos), goal, robot, planner)
+            except PlanningError:
+                failed_replans += 1
+                last_progress_step = steps
+            else:
+                replans += 1
+                batch = _hand_over(batch, plan.waypoints)
+                last_waypoint, last_progress_step = 1, steps
+        if on_step is not None:
+            on_step(env, batch.state, plan)
+    success = final["success"] > 0
+    return {"success": bool(success), "time_s": round(steps * env.dt, 3),
+            "time_to_goal_s": round(final["time_to_goal_s"], 3) if success else None,
+            "collisions": int(final["collisions"]), "fell": bool(final["fell"] > 0), "replans": replans,
+            "failed_replans": failed_replans, "path_length_m": round(first_plan.length_m, 4),
+            "walked_m": round(walked, 4), "final_distance_m": round(final["final_distance_m"], 4),
+            "planner": first_plan.planner, "plan_time_s": round(first_plan.plan_time_s, 4), "physics": physics,
+            "time_limit_s": round(time_limit, 2), "policy": str(policy.checkpoint)}
+
+
+def _hand_over(batch, waypoints: np.ndarray):
+    """The batch with environment 0 following `waypoints` from its second pose on."""
+    info = dict(batch.state.info)
+    capacity = info["path"].shape[1]
+    if len(waypoints) > capacity:
+        waypoints = np.concatenate([waypoints[:capacity - 1], waypoints[-1:]])
+    padded = np.concatenate([waypoints, np.repeat(waypoints[-1:], capacity - len(waypoints), 0)]).astype(np.float32)
+    info["path"] = info["path"].at[0].set(jnp.asarray(padded))
+    info["path_len"] = info["path_len"].at[0].set(len(waypoints))
+    info["waypoint"] = info["waypoint"].at[0].set(1)
+    return dataclasses.replace(batch, state=batch.state.replace(info=info))

@@ -1,0 +1,107 @@
+"""Warm start: begin a PPO run from the networks of a trained run of another task (e.g. the confined
+follower from the go1-flat walker).
+
+The two tasks' observations differ, so the first layer is rebuilt input by input from the observations'
+named layouts (`LeggedEnv.observation_layout`): an input both tasks have keeps its weights and its
+normaliser statistics; a waypoint command component reads the weights of the velocity command it resembles
+(a waypoint ahead is read as "walk that way"); a new input (e.g. height scans) starts with zero weights, so
+the warm-started policy first acts exactly as the source policy did. Deeper layers and the action noise
+are copied as they are, which needs the same hidden sizes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from policies.run_dir import RunDir, RunDirError
+
+ALIASES = {"command/dx": "command/vx", "command/dy": "command/vy", "command/dyaw": "command/yaw_rate"}
+"""Inputs of the target task that read the weights of a differently named input of the source task."""
+
+ADAPT_SAMPLES = 1_000_000
+"""Normaliser sample count after the warm start: its statistics then follow the new task's observations
+within the first few dozen iterations instead of staying the source task's."""
+
+
+def element_names(layout: list[tuple[str, int]]) -> list[str]:
+    """One name per observation element: 'name' for a slice of size 1 (the layout spells the command out
+    component by component), 'name/i' for element i of a longer slice."""
+    out = []
+    for name, size in layout:
+        out.extend([name] if size == 1 else [f"{name}/{i}" for i in range(size)])
+    return out
+
+
+def input_map(source: list[str], target: list[str]) -> np.ndarray:
+    """For each target input, the index of the source input it takes its weights from, or -1."""
+    where = {n: i for i, n in enumerate(source)}
+    def find(name):
+        key = name.removeprefix("state/")
+        for candidate in (name, ALIASES.get(key), f"state/{ALIASES.get(key)}" if key in ALIASES else None):
+            if candidate is not None and candidate in where:
+                return where[candidate]
+        return -1
+    return np.array([find(n) for n in target])
+
+
+def _rebuild(source: dict, target: dict, mapping: np.ndarray, fresh_mean: torch.Tensor,
+             fresh_std: torch.Tensor) -> dict:
+    """Target network state: first layer and normaliser rebuilt through `mapping`, the rest copied."""
+    out = dict(target)
+    known = torch.as_tensor(mapping >= 0)
+    src_idx = torch.as_tensor(np.maximum(mapping, 0))
+    w = source["mlp.0.weight"][:, src_idx]
+    out["mlp.0.weight"] = torch.where(known[None, :], w, torch.zeros_like(w))
+    for key in ("_mean", "_var", "_std"):
+        name = f"obs_normalizer.{key}"
+        if name in source:
+            fresh = {"_mean": fresh_mean, "_var": fresh_std ** 2, "_std": fresh_std}[key].reshape(1, -1)
+            out[name] = torch.where(known[None, :], source[name][:, src_idx], fresh)
+    if "obs_normalizer.count" in out:
+        out["obs_normalizer.count"] = torch.tensor(ADAPT_SAMPLES, dtype=out["obs_normalizer.count"].dtype)
+    for name, value in source.items():
+        if name == "mlp.0.weight" or name.startswith("obs_normalizer"):
+            continue
+        if name not in out or out[name].shape != value.shape:
+            raise RunDirError(f"cannot warm start: layer {name} has shape {tuple(value.shape)} in the source run and "
+                              f"{tuple(out[name].shape) if name in out else 'none'} here; use the source run's "
+                              "ppo.actor_hidden and ppo.critic_hidden")
+        out[name] = value
+    return out
+
+
+def source_layout(run_path: Path) -> tuple[dict, Path]:
+    """(observation layout, latest checkpoint) of a trained rsl run, without compiling its environment."""
+    from legged.tasks import make
+
+    run = RunDir(Path(run_path))
+    config = run.load_config()
+    if config.backend != "rsl":
+        raise RunDirError(f"cannot warm start from {run.path}: it was trained with the {config.backend} backend "
+                          "(warm starts read rsl-rl checkpoints)")
+    env = make(config.task, config.env)
+    if not hasattr(env, "observation_layout"):
+        raise RunDirError(f"cannot warm start from {run.path}: task {config.task} has no named observation layout")
+    return env.observation_layout(), run.latest_checkpoint()
+
+
+def warm_start(alg, run_path: Path, env, obs) -> str:
+    """Load `run_path`'s latest actor and critic into `alg` (rsl-rl PPO of `env`) through the observation
+    layouts; `obs` is a first batch of observations (statistics of the new inputs). Returns a summary."""
+    from policies.rsl_backend import load_checkpoint
+
+    if not hasattr(env, "observation_layout"):
+        raise RunDirError(f"cannot warm start this task ({type(env).__name__}): it has no named observation layout")
+    layout, path = source_layout(run_path)
+    saved = load_checkpoint(path)["alg"]
+    target_layout = env.observation_layout()
+    report = []
+    for net, group, key in ((alg.actor, "state", "actor_state_dict"), (alg.critic, "privileged_state", "critic_state_dict")):
+        mapping = input_map(element_names(layout[group]), element_names(target_layout[group]))
+        x = obs[group].float()
+        net.load_state_dict(_rebuild(saved[key], net.state_dict(), mapping, x.mean(0), x.std(0).clamp_min(1e-2)))
+        report.append(f"{group}: {int((mapping >= 0).sum())} of {len(mapping)} inputs from the source")
+    return f"warm start from {path}: " + "; ".join(report)

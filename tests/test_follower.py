@@ -1,0 +1,116 @@
+"""What the confined follower is trained and judged with: the difficulty curriculum (carried from episode
+to episode), the warm start from the go1-flat walker, and the fixed held-out evaluation."""
+
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import torch
+
+from conftest import BATCH
+from legged.envs.native import NativeEnvs
+from legged.tasks import make
+from policies.config import PPOConfig
+from policies.evaluate import confined_eval_config, one_tile_each, wilson_interval
+from policies.rsl_backend import build_ppo, dummy_observations
+from policies.warm_start import element_names, input_map, warm_start
+
+WALKER = Path(__file__).resolve().parents[1] / "assets" / "runs" / "go1-flat-native-cpu2"
+
+
+def _info(level, succeeded, waypoint, path_len=10):
+    return {"level": jnp.int32(level), "succeeded": jnp.bool_(succeeded), "waypoint": jnp.int32(waypoint),
+            "path_len": jnp.int32(path_len), "tile": jnp.int32(0)}
+
+
+def test_curriculum_promotes_on_success_and_demotes_short_episodes(confined):
+    env = confined.env
+    assert int(env.carry(_info(0, True, 9))["level"]) == 1
+    assert int(env.carry(_info(1, False, 2))["level"]) == 0   # ended short of half its path
+    assert int(env.carry(_info(1, False, 6))["level"]) == 1   # got past half: stays
+    assert int(env.carry(_info(0, False, 1))["level"]) == 0   # never below the easiest
+    assert int(env.carry(_info(0, True, 9))["tile"]) == -1     # the next tile is drawn, not kept
+
+
+def test_new_episodes_play_a_tile_of_their_level(confined):
+    env = confined.env  # two worlds: difficulty 0 (tile 0) and 2 (tile 1): levels [0, 2]
+    assert list(env.levels) == [0, 2]
+    pick = jax.jit(env._pick_tile)
+    for k in range(6):
+        key = jax.random.PRNGKey(k)
+        assert [int(x) for x in pick(key, {"level": jnp.int32(1), "tile": jnp.int32(-1)})] == [1, 1]
+        assert [int(x) for x in pick(key, {"level": jnp.int32(0), "tile": jnp.int32(-1)})] == [0, 0]
+        assert int(pick(key, {"level": jnp.int32(0), "tile": jnp.int32(1)})[0]) == 1  # an evaluator's choice
+        assert int(pick(key, {"level": jnp.int32(2), "tile": jnp.int32(-1)})[1]) in (0, 1)  # past the hardest
+    assert [int(x) for x in pick(jax.random.PRNGKey(0), None)] == [0, 0]  # first episodes: the easiest
+
+
+def test_evaluation_plays_one_world_per_episode_in_native_physics(confined):
+    env = confined.env
+    carry = one_tile_each(3, BATCH, env.terrain.num_tiles)
+    assert carry["tile"].tolist() == [(3 + i) % 2 for i in range(BATCH)]
+    native = NativeEnvs(env, BATCH)
+    state = native.reset(jax.random.split(jax.random.PRNGKey(0), BATCH), carry=carry)
+    assert np.asarray(state.info["tile"]).tolist() == carry["tile"].tolist()
+    start = np.asarray(env.terrain.starts)[carry["tile"], :2]
+    assert np.allclose(np.asarray(state.pipeline_state.qpos)[:, :2], start, atol=1e-5)
+    # the engine's own state agrees (the first reset also compiles partial resets, which must leave no trace)
+    assert np.allclose(native.physics.batch.bind("qpos")[:, :2], start, atol=1e-5)
+
+
+def test_eval_config_and_interval():
+    config = confined_eval_config(make("confined-waypoints").config, 2, 50, None)
+    assert (config.num_worlds, config.difficulties, config.curriculum) == (50, (2,), False)
+    assert config.world_seed == 1_000_003  # training seed 0 + the held-out offset
+    assert wilson_interval(0, 50) == [0.0, 0.0714]  # 3.84 / 53.84
+    low, high = wilson_interval(45, 50)
+    assert low < 0.9 < high and high < 1.0
+
+
+def test_warm_started_follower_acts_as_the_walker_on_shared_inputs():
+    """Zero weights on the new inputs (height scans, target height and tilt) and the walker's weights on the
+    shared ones: the follower's first policy is the walker, a waypoint ahead read as a velocity command."""
+    walker_env, follower_env = make("go1-flat"), make("confined-waypoints")
+    src = element_names(walker_env.observation_layout()["state"])
+    dst = element_names(follower_env.observation_layout()["state"])
+    mapping = input_map(src, dst)
+    assert [src[i] for i in mapping[dst.index("command/dx"):dst.index("command/dx") + 2]] == ["command/vx", "command/vy"]
+    assert src[mapping[dst.index("command/dyaw")]] == "command/yaw_rate"
+    assert (mapping[[n.startswith("exteroception") for n in dst]] == -1).all()
+
+    ppo = PPOConfig(actor_hidden=(128, 128, 128), critic_hidden=(128, 128, 128))
+    sizes = follower_env.observation_dims()
+    rng = np.random.default_rng(0)
+    obs = dummy_observations(sizes, 64)
+    for key in obs.keys():
+        obs[key] = torch.as_tensor(rng.normal(size=obs[key].shape), dtype=torch.float32)
+    follower = build_ppo(obs, 64, 12, ppo, "cpu")
+    warm_start(follower, WALKER, follower_env, obs)
+    walker = build_ppo(dummy_observations(walker_env.observation_dims(), 64), 64, 12, ppo, "cpu")
+    payload = torch.load(sorted((WALKER / "checkpoints").glob("*.pt"))[-1], weights_only=True)
+    walker.actor.load_state_dict(payload["alg"]["actor_state_dict"])
+    walker_obs = dummy_observations(walker_env.observation_dims(), 64)
+    state = obs["state"].clone()
+    walker_obs["state"] = state[:, torch.as_tensor(np.flatnonzero(mapping >= 0))][:, np.argsort(mapping[mapping >= 0])]
+    with torch.no_grad():
+        a = follower.actor(obs, stochastic_output=False)
+        b = walker.actor(walker_obs, stochastic_output=False)
+    assert torch.allclose(a, b, atol=1e-5)
+
+
+def test_navigation_geometry():
+    """How far the robot is from its plan, and its pose from a free joint (the replanning trigger)."""
+    import mujoco
+
+    from policies.navigate import _distance_to_path, _pose_of
+
+    path = np.array([[0.0, 0.0, 0.27], [1.0, 0.0, 0.27], [1.0, 1.0, 0.27]])
+    assert _distance_to_path(np.array([0.5, 0.3]), path) == pytest.approx(0.3)
+    assert _distance_to_path(np.array([1.4, 0.5]), path) == pytest.approx(0.4)
+    assert _distance_to_path(np.array([-1.0, 0.0]), path) == pytest.approx(1.0)
+    quat = np.zeros(4)
+    mujoco.mju_euler2Quat(quat, np.array([0.1, -0.2, 0.7]), "XYZ")  # extrinsic: Rz(yaw) Ry(pitch) Rx(roll)
+    pose = _pose_of(np.concatenate([[1.0, 2.0, 0.3], quat]))
+    np.testing.assert_allclose(pose, [1.0, 2.0, 0.3, 0.1, -0.2, 0.7], atol=1e-9)
