@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import abc
+
 import numpy as np
 from ompl import base as ob
 
 
-class BoxSpace:
+class BoxSpace(abc.ABC):
     """An OMPL RealVectorStateSpace with per-axis bounds; subclasses convert poses (`to_vector`)."""
 
     def __init__(self, low, high):
@@ -19,9 +21,9 @@ class BoxSpace:
             bounds.setHigh(k, float(self.high[k]))
         self.space.setBounds(bounds)
 
+    @abc.abstractmethod
     def to_vector(self, pose) -> np.ndarray:
         """One body pose (6,) -> a state vector (dim,)."""
-        raise NotImplementedError
 
     def state(self, pose):
         """An OMPL state holding `pose`."""
