@@ -78,7 +78,7 @@ def cmd_distill(args) -> int:
 
     record = start_distill(args.teacher_run, args.method, args.run_dir, timesteps=args.timesteps,
                            physics=args.physics, overrides=args.set, progress=not args.quiet,
-                           num_envs=args.num_envs, threads=args.threads or None)
+                           num_envs=args.num_envs, threads=args.threads or None, task=args.task)
     print(json.dumps(record))
     return 0
 
@@ -102,8 +102,8 @@ def cmd_eval(args) -> int:
     if args.ood:
         ood_config(config.env)  # fails now for tasks without dynamics randomisation
     soccer = task_entry(config.task).kind == "soccer"
-    if args.opponent and not soccer:
-        raise ValueError(f"--opponent applies to soccer tasks; {config.task} has no opponents")
+    if (args.opponent or args.teammate) and not soccer:
+        raise ValueError(f"--opponent and --teammate apply to soccer tasks; {config.task} has no opponents")
     policy, config = load_policy(args.run_dir, args.checkpoint)
     report = dict(physics=args.physics, seed=args.seed, checkpoint=str(policy.checkpoint), trained_steps=policy.step,
                   task=config.task)
@@ -114,9 +114,14 @@ def cmd_eval(args) -> int:
         env = build_env(dataclasses.replace(config, env=ood_config(env_config) if args.ood else env_config))
         check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
         samples = []
-        opponent = (soccer_opponent(args.opponent, env),) if args.opponent else ()
-        if args.opponent:
-            report["opponent"] = args.opponent
+        opponent = (soccer_opponent(args.opponent or "scripted", env),) if soccer else ()
+        if soccer:
+            report["opponent"] = args.opponent or "scripted"
+        if soccer and env.game.layout.players_per_team > 1:
+            opponent += (soccer_opponent(args.teammate or "self", env, policy),)
+            report["teammate"] = args.teammate or "self"
+        elif args.teammate:
+            raise ValueError(f"--teammate applies to 2v2 tasks; {config.task} has one player per team")
         finals = evaluate(env, policy, args.episodes, args.seed, args.physics, args.num_envs or 16,
                           args.threads or None, progress=not args.quiet, probe=samples, env_args=opponent)
         report = dict(summarize(finals, False), **report)
@@ -312,9 +317,12 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--quiet", action="store_true", help="no progress bar")
     tr.set_defaults(fn=cmd_train)
 
-    ds = sub.add_parser("distill", help="distil a privileged teacher (--algo teacher) into a deployable student")
+    ds = sub.add_parser("distill", help="distil a teacher into a deployable student: a privileged teacher (--algo "
+                                        "teacher) into a history student, a state soccer player into a vision one")
     ds.add_argument("teacher_run", help="the teacher's run directory")
-    ds.add_argument("--method", required=True, help="dagger or rma")
+    ds.add_argument("--method", required=True, help="dagger, rma (privileged teachers) or kl (vision students)")
+    ds.add_argument("--task", default=None, help="the student's task (default: the teacher's; a state soccer "
+                                                 "player's vision student: soccer-1v1-vision)")
     ds.add_argument("--run-dir", default=None, help="where the student's run is written")
     ds.add_argument("--timesteps", type=bounded(int, 1, 10**12), default=None,
                     help="environment steps (default: the teacher's)")
@@ -340,7 +348,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="confined tasks: seed of the evaluation worlds (default: the training seed + 1000003, "
                          "worlds never trained on)")
     ev.add_argument("--opponent", default=None, metavar="placo|scripted|RUN",
-                    help="soccer tasks: who plays the other robots (default: the standing script)")
+                    help="soccer tasks: who plays the other team (default: the standing script)")
+    ev.add_argument("--teammate", default=None, metavar="self|placo|scripted|RUN",
+                    help="2v2: who plays the learner's teammate (default: self, the evaluated policy)")
     ev.add_argument("--ood", action="store_true",
                     help="out of the training distribution: friction 0.1-0.25, +4 kg payload, motor strength "
                          "0.7-0.8, pushes 1.5x stronger (Go1 tasks)")

@@ -118,12 +118,15 @@ def make(task: str, config=None, **overrides):
     return entry.factory(config)
 
 
-def learner_env(entry: TaskEntry, env, activation: str = "elu", hidden: tuple[int, ...] = ()):
+def learner_env(entry: TaskEntry, env, activation: str = "elu", hidden: tuple[int, ...] = (), walker=None):
     """The single-agent environment trainers step: `env` itself, or for soccer agent 0's view of the game
-    (the other robots driven by opponents handed to each step; `activation` and `hidden` shape them)."""
+    (the other robots driven by opponents handed to each step; `activation` and `hidden` shape them; with a
+    `legged.soccer.walker.Walker` the players command velocities)."""
     if entry.kind != "soccer":
+        if walker is not None:
+            raise ValueError(f"a walker drives soccer players; {entry.name} is a {entry.kind} task")
         return env
     from legged.soccer.learner import LearnerView
     from legged.soccer.opponents import OpponentNet
 
-    return LearnerView(env, OpponentNet(activation), hidden)
+    return LearnerView(env, OpponentNet(activation), hidden, walker)

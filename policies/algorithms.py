@@ -10,6 +10,10 @@ read, which model classes it builds, and which loss it adds.
 | history    | head on (state, enc(history))               | head on (state, enc(history)) | PPO                  |
 | dagger     | head on (state, enc(history))               | the teacher's actor          | behaviour cloning     |
 | rma        | teacher's head on (state, enc(history))     | the teacher's actor          | z regression (policies.distill) |
+| kl         | CNN + MLP on (state, camera)                | MLP on privileged_state      | PPO + KL to a state teacher (policies.teacher_kl) |
+
+Vision students (dagger and kl on soccer-1v1-vision) read (state, camera), and their teacher, a state soccer
+player, reads `features`.
 
 enc(history) is `latent.history_encoder` (HistoryConv by default) for every method that reads the history.
 """
@@ -35,12 +39,21 @@ DYNAMICS_GROUPS = ("dynamics", "com", "motor_strength")
 
 
 def actor_inputs(algo: str, camera: bool = False) -> list[str]:
-    """Observation groups the deployed actor of `algo` reads, in its input order."""
+    """Observation groups the deployed actor of `algo` reads, in its input order (camera tasks: the state and
+    the image, for ppo and the vision students alike)."""
+    if camera:
+        return ["state", "camera"]
     if algo == "teacher":
         return ["state", "privileged_state"]
-    if algo in ("hib", "hib-no-ib", "history", "dagger", "rma"):
+    if algo in HISTORY_ALGOS:
         return ["state", "history"]
-    return ["state", "camera"] if camera else ["state"]
+    return ["state"]
+
+
+def teacher_inputs(teacher: TrainConfig) -> list[str]:
+    """Observation groups a distillation's teacher reads in its student's environment: a privileged teacher's
+    own; a state soccer player's state features, which its vision task gives as `features`."""
+    return ["features"] if teacher.algo == "ppo" else actor_inputs(teacher.algo)
 
 
 def _mlp(hidden, activation: str, normalize: bool, std: float | None = None, camera: bool = False) -> dict:
@@ -57,7 +70,7 @@ def actor_model(config: TrainConfig, std: float, camera: bool = False) -> dict:
     """rsl-rl model config of the actor of `config.algo` (dagger: of its student)."""
     ppo, lat, algo = config.ppo, config.latent, config.algo
     base = _mlp(ppo.actor_hidden, ppo.activation, ppo.obs_normalization, std, camera)
-    if algo in ("teacher",) + HISTORY_ALGOS:
+    if algo in ("teacher",) + HISTORY_ALGOS and not camera:
         base.update(_latent(lat), gaussian=algo in ("hib", "hib-no-ib"),
                     privileged_embedding=lat.projection_dim if algo in ("hib", "hib-no-ib") else 0)
     return base
@@ -98,12 +111,13 @@ def ppo_train_cfg(config: TrainConfig, camera: bool = False, multi_gpu: dict | N
     }
 
 
-def distill_train_cfg(config: TrainConfig, teacher: TrainConfig, multi_gpu: dict | None = None) -> dict:
+def distill_train_cfg(config: TrainConfig, teacher: TrainConfig, multi_gpu: dict | None = None,
+                      camera: bool = False) -> dict:
     """rsl-rl's train_cfg of a distillation (dagger, rma) from the `teacher` run's config."""
     from policies.distill import LatentRegression
 
     d = config.distill
-    student = actor_model(config, d.student_noise_std)
+    student = actor_model(config, d.student_noise_std, camera)
     if config.algo == "rma":  # the teacher's head and latent size, a history encoder of the student's own
         student.update(hidden_dims=list(teacher.ppo.actor_hidden), activation=teacher.ppo.activation,
                        latent_dim=teacher.latent.latent_dim)
@@ -113,7 +127,7 @@ def distill_train_cfg(config: TrainConfig, teacher: TrainConfig, multi_gpu: dict
                       "gradient_length": d.gradient_length, "max_grad_norm": config.ppo.max_grad_norm},
         "student": student,
         "teacher": actor_model(teacher, teacher.ppo.init_noise_std),
-        "obs_groups": {"student": actor_inputs(config.algo), "teacher": actor_inputs("teacher")},
+        "obs_groups": {"student": actor_inputs(config.algo, camera), "teacher": teacher_inputs(teacher)},
         "num_steps_per_env": config.ppo.num_steps_per_env,
         "multi_gpu": multi_gpu,
     }
@@ -141,7 +155,7 @@ def build_algorithm(config: TrainConfig, obs: TensorDict, num_envs: int, num_act
         if config.algo in ("dagger", "rma"):
             if teacher is None:
                 raise ValueError(f"--algo {config.algo} needs the teacher run's config")
-            cfg = distill_train_cfg(config, teacher, launch.multi_gpu_config())
+            cfg = distill_train_cfg(config, teacher, launch.multi_gpu_config(), camera)
             return cfg["algorithm"]["class_name"].construct_algorithm(obs, _Shapes(num_envs, num_actions), cfg, device)
         return PPO.construct_algorithm(obs, _Shapes(num_envs, num_actions),
                                        ppo_train_cfg(config, camera, launch.multi_gpu_config()), device)
@@ -155,6 +169,21 @@ def privileged_slices(layout: dict, names=DYNAMICS_GROUPS) -> list[slice]:
             out.append(slice(start, start + size))
         start += size
     return out
+
+
+def attach_teacher_kl(alg: PPO, config: TrainConfig, teacher: TrainConfig, payload: dict, obs: TensorDict,
+                      iteration: int) -> None:
+    """Give a kl student's PPO its pull towards the frozen teacher (policies.teacher_kl), the teacher's actor
+    rebuilt from its config and loaded from its checkpoint `payload`."""
+    from rsl_rl.utils import resolve_class
+
+    from policies.teacher_kl import TeacherKL
+
+    cls, kwargs = resolve_class(actor_model(teacher, teacher.ppo.init_noise_std))
+    model = cls(obs, {"teacher": teacher_inputs(teacher)}, "teacher", payload["num_actions"], **kwargs)
+    model.load_state_dict(payload["alg"]["actor_state_dict"], strict=True)
+    d = config.distill
+    alg.symmetry = TeacherKL(model, d.kl_weight, d.kl_decay, iteration)
 
 
 def attach_information_bottleneck(alg: PPO, config: TrainConfig, layout: dict, seed: int) -> None:

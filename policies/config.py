@@ -71,6 +71,8 @@ class SelfPlayConfig:
     """Snapshots kept (the oldest is dropped)."""
     scripted_fraction: float = 0.2
     """Chance that an iteration plays the script instead of a snapshot (always, while the pool is empty)."""
+    script: Literal["placo", "standing"] = "placo"
+    """The script: the placo player (walks to the ball and kicks it) or the standing goalkeeper."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -113,10 +115,16 @@ class DistillConfig:
     """Rollout steps whose losses are summed per gradient step."""
     student_noise_std: float = 0.1
     """dagger: standard deviation of the student's exploration noise while it acts."""
+    kl_weight: float = 1.0
+    """kl: initial weight of KL(teacher || student) added to the student's PPO loss (policies.teacher_kl)."""
+    kl_decay: float = 0.995
+    """kl: factor applied to that weight after every iteration."""
 
 
-ALGOS = ("ppo", "teacher", "hib", "hib-no-ib", "history", "dagger", "rma")
-"""Training algorithms: `legged train --algo` takes the first five, `legged distill --method` the last two."""
+ALGOS = ("ppo", "teacher", "hib", "hib-no-ib", "history", "dagger", "rma", "kl")
+"""Training algorithms: `legged train --algo` takes the first five, `legged distill --method` the last three."""
+DISTILL_ALGOS = ("dagger", "rma", "kl")
+"""Algorithms that learn from a teacher run (`distill.teacher`)."""
 
 HISTORY_ALGOS = ("hib", "hib-no-ib", "history", "dagger", "rma")
 """Algorithms whose actor reads the `history` observation."""
@@ -146,7 +154,7 @@ class TrainConfig:
     """CPU threads of native physics and of torch (0: every core this process may use)."""
     init_from: str = ""
     """Run directory whose latest networks start this run (rsl backend; policies.warm_start), or '' for none."""
-    algo: Literal["ppo", "teacher", "hib", "hib-no-ib", "history", "dagger", "rma"] = "ppo"
+    algo: Literal["ppo", "teacher", "hib", "hib-no-ib", "history", "dagger", "rma", "kl"] = "ppo"
     """ppo: actor on `state`; teacher: actor on `state` and an encoding of `privileged_state`; hib, hib-no-ib,
     history: one-stage students on the state history; dagger, rma: students distilled from `distill.teacher`."""
     ppo: PPOConfig = PPOConfig()
@@ -159,6 +167,9 @@ class TrainConfig:
     """The task's environment config (filled in from the task's defaults)."""
     selfplay: SelfPlayConfig = SelfPlayConfig()
     """Opponents of the soccer tasks (ignored by the others)."""
+    walker: str = ""
+    """Soccer tasks: run directory of an op3-walk policy; the learner then commands velocities that this frozen
+    walker turns into joint actions (legged.soccer.walker). '' : the learner drives the joints itself."""
 
     @property
     def self_play(self) -> bool:
@@ -204,6 +215,11 @@ class TrainConfig:
         sp = cfg.selfplay
         if sp.snapshot_every < 1 or sp.pool_size < 1 or not 0.0 <= sp.scripted_fraction <= 1.0:
             raise ConfigError("selfplay: snapshot_every and pool_size must be >= 1, scripted_fraction in [0, 1]")
+        if sp.script not in ("placo", "standing"):
+            raise ConfigError(f"selfplay.script must be 'placo' or 'standing', got {sp.script!r}")
+        if cfg.walker and (entry.kind != "soccer" or cfg.backend != "rsl"):
+            raise ConfigError(f"walker (an op3-walk run the learner commands) is for soccer tasks with the rsl "
+                              f"backend, not {cfg.task} with {cfg.backend}")
         if cfg.num_envs * cfg.ppo.num_steps_per_env % cfg.ppo.num_mini_batches:
             raise ConfigError(f"num_envs x num_steps_per_env ({cfg.num_envs} x {cfg.ppo.num_steps_per_env}) must "
                               f"divide into num_mini_batches ({cfg.ppo.num_mini_batches})")
@@ -218,6 +234,14 @@ def _check_algo(cfg: TrainConfig, entry) -> TrainConfig:
         return cfg
     if cfg.init_from:
         raise ConfigError(f"init_from (a warm start) works with --algo ppo only, not {cfg.algo}")
+    if cfg.algo in DISTILL_ALGOS and not cfg.distill.teacher:
+        raise ConfigError(f"--algo {cfg.algo} distils a teacher: use `legged distill TEACHER_RUN --method {cfg.algo}`")
+    if cfg.algo in ("dagger", "kl") and entry.kind == "soccer" and entry.vision and cfg.backend == "rsl":
+        _check_distill(cfg.distill)  # a camera student of a state soccer player (policies.distill)
+        return cfg
+    if cfg.algo == "kl":
+        raise ConfigError(f"--method kl distils a state soccer player into its vision task (--task "
+                          f"soccer-1v1-vision), not into {cfg.task}")
     if cfg.backend != "rsl" or entry.vision or entry.kind == "soccer":
         raise ConfigError(f"--algo {cfg.algo} needs the rsl backend and a single-robot state task (not {cfg.task} "
                           f"with backend {cfg.backend})")
@@ -231,17 +255,19 @@ def _check_algo(cfg: TrainConfig, entry) -> TrainConfig:
     for name, ok in rules:
         if not ok:
             raise ConfigError(f"latent.{name} is out of range: {getattr(lat, name)!r}")
-    if cfg.algo in ("dagger", "rma") and not cfg.distill.teacher:
-        raise ConfigError(f"--algo {cfg.algo} distils a teacher: use `legged distill TEACHER_RUN --method {cfg.algo}`")
-    d = cfg.distill
-    if not (0 < d.learning_rate <= 1 and d.num_learning_epochs >= 1 and d.gradient_length >= 1
-            and 0 < d.student_noise_std <= 10):
-        raise ConfigError(f"distill: learning_rate in (0, 1], num_learning_epochs and gradient_length >= 1, "
-                          f"student_noise_std in (0, 10]; got {d}")
+    _check_distill(cfg.distill)
     history = lat.history_steps if cfg.algo in HISTORY_ALGOS else 0
     if getattr(cfg.env, "history_steps", None) is None:
         raise ConfigError(f"--algo {cfg.algo} needs a legged task with a state history; {cfg.task} has none")
     return dataclasses.replace(cfg, env=dataclasses.replace(cfg.env, history_steps=history))
+
+
+def _check_distill(d: DistillConfig) -> None:
+    """ConfigError naming the distillation settings outside their ranges."""
+    if not (0 < d.learning_rate <= 1 and d.num_learning_epochs >= 1 and d.gradient_length >= 1
+            and 0 < d.student_noise_std <= 10 and 0 <= d.kl_weight <= 1e3 and 0 < d.kl_decay <= 1):
+        raise ConfigError(f"distill: learning_rate in (0, 1], num_learning_epochs and gradient_length >= 1, "
+                          f"student_noise_std in (0, 10], kl_weight in [0, 1000], kl_decay in (0, 1]; got {d}")
 
 
 def _check_ppo(ppo: PPOConfig) -> None:
@@ -287,7 +313,7 @@ def _convert(kind, value, path: str):
     if dataclasses.is_dataclass(kind):
         if not isinstance(value, dict):
             raise ConfigError(f"{path}: expected a mapping for {kind.__name__}, got {value!r}")
-        return from_dict(kind, value, path)
+        return from_dict(kind, value, f"{path}.")
     if origin is tuple:
         item = typing.get_args(kind)[0]
         return tuple(_convert(item, v, path) for v in value)
@@ -319,7 +345,7 @@ def from_dict(cls, data: dict, path: str = ""):
     names = {f.name for f in dataclasses.fields(cls)}
     unknown = set(data) - names
     if unknown:
-        raise ConfigError(f"unknown config field(s) {sorted(unknown)} in {path or cls.__name__}")
+        raise ConfigError(f"unknown config field(s) {sorted(unknown)} in {path.rstrip('.') or cls.__name__}")
     return cls(**{k: _convert(hints[k], v, f"{path}{k}") for k, v in data.items()})
 
 

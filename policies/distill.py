@@ -1,11 +1,18 @@
-"""`legged distill TEACHER_RUN --method dagger|rma`: students from a privileged teacher (trained with
-`--algo teacher`), as ordinary run directories (trained by policies.rsl_backend, like every rsl run).
+"""`legged distill TEACHER_RUN --method dagger|rma|kl [--task T]`: students from a teacher, as ordinary run
+directories (trained by policies.rsl_backend, like every rsl run).
 
-- dagger: rsl-rl's Distillation. The student (an MLP on the state and its history) acts, with a little
-  exploration noise, and the teacher labels every step; the loss is the squared action difference.
-- rma (Kumar et al. 2021, phase 2): the student's history encoder regresses the teacher's latent z_p of the
-  same step, and the student acts with the teacher's head, copied and frozen, fed the state normalised as
-  the teacher normalised it (its normaliser is the teacher's, frozen).
+Two kinds of teacher:
+- a privileged teacher (trained with `--algo teacher`; its student plays the same task from its history):
+  - dagger: rsl-rl's Distillation. The student (a head on the state and an encoding of its history) acts,
+    with a little exploration noise, and the teacher labels every step; the loss is the squared action
+    difference.
+  - rma (Kumar et al. 2021, phase 2): the student's history encoder regresses the teacher's latent z_p of
+    the same step, and the student acts with the teacher's head, copied and frozen, fed the state normalised
+    as the teacher normalised it (its normaliser is the teacher's, frozen).
+- a state soccer player (soccer-1v1 or soccer-2v2, `--algo ppo`), whose student plays the vision task
+  (`--task soccer-1v1-vision`) from proprioception and the head camera; the teacher reads the state features
+  the vision task gives as `features`. Methods: dagger (as above) and kl (the anchors' KL-regularised RL,
+  policies.teacher_kl). A teacher that commands a walker (`walker`) passes it on: the student commands it too.
 """
 
 from __future__ import annotations
@@ -22,7 +29,7 @@ from rsl_rl.algorithms import Distillation
 from policies.config import ConfigError, TrainConfig, apply_overrides, to_dict
 from policies.run_dir import RunDir, RunDirError
 
-METHODS = ("dagger", "rma")
+METHODS = ("dagger", "rma", "kl")
 """Distillation methods."""
 
 
@@ -63,8 +70,17 @@ class LatentRegression(Distillation):
         return {k: v / max(count, 1) for k, v in totals.items()}
 
 
-def teacher_config(path: Path) -> TrainConfig:
-    """The config of a teacher run; ConfigError naming the problem when it cannot teach."""
+def vision_student_task(teacher_task: str) -> str | None:
+    """The vision task a state soccer player's student plays (None when there is none)."""
+    from legged.tasks import TASKS
+
+    task = f"{teacher_task}-vision"
+    return task if task in TASKS and TASKS[task].vision and TASKS[teacher_task].kind == "soccer" else None
+
+
+def teacher_config(path: Path, student_task: str | None = None) -> TrainConfig:
+    """The config of a teacher run for a student of `student_task` (default: the teacher's own task);
+    ConfigError naming the problem when it cannot teach it."""
     run = RunDir(path)
     if not (run.path / "config.yaml").is_file():
         raise ConfigError(f"teacher {path} is not a run directory (no config.yaml)")
@@ -72,6 +88,14 @@ def teacher_config(path: Path) -> TrainConfig:
     if config.backend != "rsl":
         raise ConfigError(f"teacher {path} was trained with the {config.backend} backend; distillation needs an "
                           f"rsl teacher trained with --algo teacher")
+    if student_task not in (None, config.task):
+        if student_task != vision_student_task(config.task) or config.algo != "ppo":
+            raise ConfigError(f"teacher {path} ({config.task}, --algo {config.algo}) cannot teach {student_task}: "
+                              f"a student of another task is the vision student of a state soccer player "
+                              f"(soccer-1v1 -> soccer-1v1-vision)")
+        if not run.checkpoints():
+            raise ConfigError(f"teacher {path} has no checkpoint yet")
+        return config
     if config.algo != "teacher":
         raise ConfigError(f"teacher {path} was trained with --algo {config.algo}; a teacher reads privileged "
                           f"observations: train one with `legged train {config.task} --algo teacher`")
@@ -85,13 +109,16 @@ def load_teacher(config: TrainConfig, env) -> tuple[TrainConfig, dict]:
     from policies.rsl_backend import load_checkpoint
 
     path = Path(config.distill.teacher)
-    teacher = teacher_config(path)
+    teacher = teacher_config(path, config.task)
     payload = load_checkpoint(RunDir(path).latest_checkpoint())
     sizes = env.observation_dims()
+    mine = {"state": "features"} if teacher.task != config.task else {}  # a vision student's teacher
     for group in ("state", "privileged_state"):
-        if payload["obs_sizes"].get(group) != sizes.get(group):
+        if payload["obs_sizes"].get(group) != sizes.get(mine.get(group, group)):
             raise RunDirError(f"teacher {path} observed {group} of size {payload['obs_sizes'].get(group)}, this "
-                              f"environment gives {sizes.get(group)}")
+                              f"environment gives {sizes.get(mine.get(group, group))}")
+    if payload["num_actions"] != env.action_size:
+        raise RunDirError(f"teacher {path} has {payload['num_actions']} actions, its student {env.action_size}")
     return teacher, payload
 
 
@@ -113,12 +140,18 @@ def start_student(alg, config: TrainConfig, teacher: TrainConfig, payload: dict)
 
 def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps: int | None = None,
                   physics: str | None = None, overrides: list[str] = (), progress: bool = True,
-                  num_envs: int | None = None, threads: int | None = None) -> dict:
-    """Check the teacher, create the student's run directory (its config names the teacher), train."""
+                  num_envs: int | None = None, threads: int | None = None, task: str | None = None) -> dict:
+    """Check the teacher, create the student's run directory (its config names the teacher), train; `task`:
+    the student's (default: the teacher's own)."""
     if method not in METHODS:
         raise ConfigError(f"unknown distillation method {method!r}; methods: {', '.join(METHODS)}")
-    teacher = teacher_config(Path(teacher_run))
+    teacher = teacher_config(Path(teacher_run), task)
     changes = dict(algo=method, distill=dataclasses.replace(teacher.distill, teacher=str(teacher_run)), init_from="")
+    if task not in (None, teacher.task):  # a vision student: the teacher's game, seen through the camera
+        if method == "rma":
+            raise ConfigError("rma regresses a privileged teacher's latent; a vision student learns by dagger or kl")
+        changes.update(task=task, env=dataclasses.replace(teacher.env, vision=True),
+                       selfplay=dataclasses.replace(teacher.selfplay, opponent="scripted"))
     for name, value in (("timesteps", timesteps), ("physics", physics), ("num_envs", num_envs), ("threads", threads)):
         if value is not None:
             changes[name] = value

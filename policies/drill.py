@@ -65,12 +65,13 @@ def drill_player(spec: str, env: DrillEnv):
 
 
 def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
-    """The drill's environment for `player`: the drill itself, or for a skill run (legged.soccer.skills) its
-    task set up as the drill; the soccer game's randomisation on or off."""
+    """The drill's environment for `player`: the drill itself (commanding the run's walker if it has one), or
+    for a skill run (legged.soccer.skills) its task set up as the drill; the game's randomisation on or off."""
     from legged.soccer import skills
     from policies.run_dir import RunDir
 
-    task = None if player == "placo" else RunDir(player).load_config().task
+    run = None if player == "placo" else RunDir(player).load_config()
+    task = None if run is None else run.task
     if task == "op3-walk":
         config = WalkSkillConfig(command_seconds=drill.command_seconds, command_low=drill.command_low,
                                  command_high=drill.command_high)
@@ -83,7 +84,12 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
         return skills.WalkSkillEnv(config)
     if task == "op3-getup":
         return skills.GetUpSkillEnv(config)
-    return DrillEnv(drill, config, placo=player == "placo")
+    walker = None
+    if run is not None and run.walker:  # a soccer player that commands a walking skill
+        from policies.policy_io import load_walker
+
+        walker = load_walker(run.walker)
+    return DrillEnv(drill, config, placo=player == "placo", walker=walker)
 
 
 def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "native", threads: int | None = None,

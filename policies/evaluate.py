@@ -89,22 +89,32 @@ def one_tile_each(first: int, count: int, tiles: int) -> dict:
     return {"level": np.zeros(count, np.int32), "tile": (np.arange(first, first + count) % tiles).astype(np.int32)}
 
 
-def soccer_opponent(spec: str, env):
-    """The `Opponent` that `--opponent` names for a soccer learner's view `env`: `placo` (walks and kicks),
-    `scripted` (stands, head on the ball) or a soccer run directory (its deterministic actor)."""
+def soccer_opponent(spec: str, env, policy=None):
+    """The `Opponent` that `--opponent` (or `--teammate`) names for a soccer learner's view `env`: `placo`
+    (walks and kicks), `scripted` (stands, head on the ball), `self` (the evaluated `policy`) or a soccer run
+    directory (its deterministic actor)."""
     from legged.soccer.opponents import placo_opponent, scripted_opponent
+    from policies.selfplay import snapshot_rsl_actor
 
     size = env.game.policy_state_size
     if spec in ("placo", "scripted"):
         return (placo_opponent if spec == "placo" else scripted_opponent)(size, env.action_size)
+    if spec == "self":
+        if policy is None or policy.backend != "rsl" or policy.inputs != ("state",):
+            raise ValueError("--teammate self needs an rsl-rl policy on the state features (a vision or Brax "
+                             "player cannot drive its teammate): name placo, scripted or a state run instead")
+        return snapshot_rsl_actor(policy.torch_module)
     from policies.policy_io import load_policy
     from policies.run_dir import RunDir
-    from policies.selfplay import snapshot_rsl_actor
 
     config = RunDir(spec).load_config()  # RunDirError naming the path if it is not a run
     if task_entry(config.task).kind != "soccer" or config.backend != "rsl" or config.algo != "ppo":
         raise ValueError(f"--opponent {spec}: a soccer opponent is placo, scripted or an rsl-rl soccer run; this "
                          f"run trained {config.task} with {config.backend}/{config.algo}")
+    if bool(config.walker) != (env.walker is not None):
+        mine = "commands a walker" if env.walker is not None else "drives its joints"
+        raise ValueError(f"--opponent {spec}: the learner {mine}, the opponent run "
+                         f"{'commands a walker' if config.walker else 'drives its joints'}: both must do the same")
     policy, _ = load_policy(spec)
     if policy.inputs != ("state",) or policy.obs_sizes["state"] != size:
         raise ValueError(f"--opponent {spec}: its actor reads {policy.obs_sizes['state']} state features; the "

@@ -130,3 +130,21 @@ def load_policy(run_dir: str | Path, checkpoint: str | Path | None = None) -> tu
         raise RunDirError(f"checkpoint not found: {path}")
     loader = _rsl_policy if config.backend == "rsl" else _brax_policy
     return loader(config, path), config
+
+
+def load_walker(run_dir: str | Path):
+    """The frozen walking skill of an op3-walk run (`legged.soccer.walker.Walker`), for soccer players that
+    command velocities; ValueError naming what is wrong when the run is not one."""
+    from legged.soccer.gait_table import load_gait_table
+    from legged.soccer.opponents import OpponentNet
+    from legged.soccer.walker import Walker
+    from policies.selfplay import snapshot_rsl_actor
+
+    config = RunDir(run_dir).load_config()  # RunDirError naming the path if it is not a run
+    if config.task != "op3-walk" or config.backend != "rsl" or config.algo != "ppo":
+        raise ValueError(f"walker {run_dir}: a walker is an op3-walk run trained with rsl/ppo; this run trained "
+                         f"{config.task} with {config.backend}/{config.algo}")
+    policy, _ = load_policy(run_dir)
+    return Walker(policy=snapshot_rsl_actor(policy.torch_module), net=OpponentNet(config.ppo.activation),
+                  command_low=tuple(config.env.command_low), command_high=tuple(config.env.command_high),
+                  period=float(load_gait_table().period))

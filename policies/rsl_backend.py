@@ -19,8 +19,13 @@ from tqdm import tqdm
 
 from legged.envs.native import default_threads
 from legged.envs.vector import VectorEnv
-from policies.algorithms import attach_information_bottleneck, build_algorithm, build_ppo  # noqa: F401 (re-export)
-from policies.config import TrainConfig
+from policies.algorithms import (  # noqa: F401 (build_ppo: a re-export)
+    attach_information_bottleneck,
+    attach_teacher_kl,
+    build_algorithm,
+    build_ppo,
+)
+from policies.config import DISTILL_ALGOS, TrainConfig
 from policies.distributed import Launch, init_torch_processes
 from policies.rsl_vecenv import RslVecEnv
 from policies.run_dir import RunDir, RunDirError, TrainingDiverged, check_compatible
@@ -112,7 +117,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     venv = RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device,
                      latent_noise=config.latent.latent_dim if hib else 0)
     teacher = None
-    if config.algo in ("dagger", "rma"):
+    if config.algo in DISTILL_ALGOS:
         from policies.distill import load_teacher
 
         teacher = load_teacher(config, env)
@@ -120,11 +125,13 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                           teacher=None if teacher is None else teacher[0])
     if hib:
         attach_information_bottleneck(alg, config, env.observation_layout(), seed=config.seed + 7 * iteration)
+    if config.algo == "kl":
+        attach_teacher_kl(alg, config, *teacher, venv.get_observations(), iteration)
     if payload is not None:
         alg.load(payload["alg"], None, strict=True)
         if launch.is_main:
             torch.set_rng_state(payload["torch_rng"])
-    elif teacher is not None:
+    elif teacher is not None and config.algo != "kl":  # kl: a fresh student, pulled towards its teacher
         from policies.distill import start_student
 
         start_student(alg, config, *teacher)
@@ -162,7 +169,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
             opponent = None
             if pool is not None:
                 opponent, data = pool.sample()
-                venv.env_args = (data,)
+                venv.env_args = (data, pool.teammate()) if env.game.layout.players_per_team > 1 else (data,)
             with torch.inference_mode():
                 for _ in range(ppo.num_steps_per_env):
                     actions = alg.act(obs)
@@ -174,8 +181,11 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
             if layout is not None and (iteration + 1) % config.checkpoint_every == 0:
                 diagnostics = probe_rollout(alg, layout)
             losses = alg.update()
-            if hasattr(getattr(alg, "symmetry", None), "means"):  # HIB's information bottleneck
-                diagnostics.update(alg.symmetry.means())
+            extension = getattr(alg, "symmetry", None)
+            if hasattr(extension, "means"):  # HIB's information bottleneck, a kl student's pull to its teacher
+                diagnostics.update(extension.means())
+            if hasattr(extension, "end_iteration"):
+                extension.end_iteration()
             diverged = non_finite(losses, alg)
             iteration += 1
             if pool is not None and iteration % config.selfplay.snapshot_every == 0:

@@ -15,6 +15,7 @@ from legged.soccer.opponents import (
     network_opponent,
     opponent_from_numpy,
     opponent_to_numpy,
+    placo_opponent,
     scripted_opponent,
 )
 from policies.config import SelfPlayConfig
@@ -35,11 +36,13 @@ def snapshot_rsl_actor(actor: torch.nn.Module) -> Opponent:
 
 
 class OpponentPool:
-    """The last `pool_size` snapshots; `sample` picks the script or a snapshot for the next iteration."""
+    """The last `pool_size` snapshots; `sample` picks the script (`config.script`) or a snapshot for the next
+    iteration."""
 
     def __init__(self, config: SelfPlayConfig, obs_size: int, action_size: int, hidden: tuple[int, ...], seed: int):
         self.config = config
-        self.scripted = scripted_opponent(obs_size, action_size, hidden)
+        script = placo_opponent if config.script == "placo" else scripted_opponent
+        self.scripted = script(obs_size, action_size, hidden)
         self.snapshots: list[Opponent] = []
         self.rng = np.random.default_rng(seed)
 
@@ -53,6 +56,10 @@ class OpponentPool:
             return -1, self.scripted
         i = int(self.rng.integers(len(self.snapshots)))
         return i, self.snapshots[i]
+
+    def teammate(self) -> Opponent:
+        """Who plays beside the learner in 2v2: its newest snapshot (the script while the pool is empty)."""
+        return self.snapshots[-1] if self.snapshots else self.scripted
 
     def state_dict(self) -> dict:
         """Picklable pool contents and sampler state (for checkpoints)."""

@@ -12,7 +12,7 @@ from policies.run_dir import RunDir
 def build_env(config: TrainConfig, progress: bool = True):
     """The run's environment as its registry entry says: confined tasks on traversable worlds with planned
     waypoints; soccer tasks as the learner's view of the game (agent 0; the others driven by opponents
-    given to each step)."""
+    given to each step), commanding `config.walker` when it names one."""
     from legged.tasks import learner_env, make, task_entry
 
     entry = task_entry(config.task)
@@ -22,7 +22,12 @@ def build_env(config: TrainConfig, progress: bool = True):
         env = make_planned_env(config.task, config=config.env, progress=progress)
     else:
         env = make(config.task, config.env)
-    return learner_env(entry, env, config.ppo.activation, config.ppo.actor_hidden)
+    walker = None
+    if config.walker:
+        from policies.policy_io import load_walker
+
+        walker = load_walker(config.walker)
+    return learner_env(entry, env, config.ppo.activation, config.ppo.actor_hidden, walker)
 
 
 def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> dict:

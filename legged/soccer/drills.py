@@ -31,6 +31,7 @@ from legged.soccer.learner import LearnerView
 from legged.soccer.observe import read_bodies
 from legged.soccer.placo_player import actions_of, command_request, motion_step, request_from_features
 from legged.soccer.task_config import SoccerConfig
+from legged.soccer.walker import Walker
 
 DRILLS = ("walk", "empty-goal", "getup")
 """The drills."""
@@ -73,12 +74,13 @@ class DrillConfig:
 class DrillEnv(LearnerView):
     """One OP3 on the pitch doing a drill (see the module docstring); the other robot stands off the pitch."""
 
-    def __init__(self, drill: DrillConfig, config: SoccerConfig = SoccerConfig(), placo: bool = False):
+    def __init__(self, drill: DrillConfig, config: SoccerConfig = SoccerConfig(), placo: bool = False,
+                 walker: Walker | None = None):
         getup = drill.name == "getup"
         config = dataclasses.replace(config, end_on_fall="never" if getup else "agent0",
                                      end_on_goal=drill.name == "empty-goal",
                                      episode_seconds=drill.getup_seconds if getup else 20.0)
-        super().__init__(SoccerEnv(config))
+        super().__init__(SoccerEnv(config), walker=walker)
         if self.game.n_agents != 2:
             raise ValueError(f"drills play on the 1v1 scene (2 robots), got {self.game.n_agents}")
         self.drill, self.placo = drill, placo
@@ -150,6 +152,8 @@ class DrillEnv(LearnerView):
             targets, row = motion_step(self.tables, memory[0], *request)
             action = actions_of(targets, self.tables.default_pose, self.robot.action_scale)
             memory = memory.at[0].set(row)
+        else:
+            action = self.learner_actions(state, action)
         actions = jnp.stack([action, jnp.zeros_like(action)])
         return self.game.joint_targets(actions), (actions, memory)
 

@@ -5,7 +5,8 @@ vmappable) with actions [n_agents, 20] (joint-position offsets from the default 
 here). `State.obs` holds, per agent (leading axis): `state` (the deployable observation: proprioception
 plus the game in the agent's heading frame; proprioception only in vision mode), `privileged_state`
 (everything in `state` without noise plus ground truth for critics and teachers), and in vision mode
-`camera` ([n_agents, 4, H, W]: RGB and depth from the head camera). `State.reward` is [n_agents];
+`camera` ([n_agents, 4, H, W]: RGB and depth from the head camera) and `features` (the state task's
+`state` without noise, which a state teacher reads while its vision student learns). `State.reward` is [n_agents];
 `State.metrics` holds each weighted reward term as `reward/<term>` [n_agents] and the game's statistics.
 
 The game: a goal scores +-1 and play restarts from the kick-off poses (or the episode ends, with
@@ -199,6 +200,8 @@ class SoccerEnv(MjxEnv):
         fraction = info["step"].astype(jnp.float32) / c.episode_steps
         privileged = jnp.concatenate([clean, observe.privileged_features(b, self._team, info["score"], fraction)], -1)
         obs = {"state": state, "privileged_state": privileged}
+        if c.vision:  # what the state players read, for their students' teachers (legged distill)
+            obs["features"] = clean
         if self.camera is not None:
             images = render(self.camera, data) if data.camera_rgb is None else \
                 {"rgb": data.camera_rgb, "depth": data.camera_depth}
@@ -216,4 +219,5 @@ class SoccerEnv(MjxEnv):
         zeros = jnp.zeros((self.n_agents, self.action_size))
         return dict(rng=rng, step=jnp.int32(0), last_action=zeros, last_qvel=zeros, score=jnp.zeros(2, jnp.int32),
                     fallen=jnp.zeros(self.n_agents, bool), out_of_play=jnp.int32(0), truncation=jnp.float32(0.0),
-                    teleported=jnp.bool_(False), players=initial_memory(self.n_agents))
+                    teleported=jnp.bool_(False), players=initial_memory(self.n_agents),
+                    walker_phase=jnp.zeros(self.n_agents, jnp.float32))

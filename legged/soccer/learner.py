@@ -2,7 +2,8 @@
 
 The learner controls agent 0 (home0, attacking +x). Every other robot (in 2v2 the learner's teammate too)
 acts from an `Opponent` passed to `step` as data (a frozen self-play snapshot, the placo player or the
-standing script); without one the standing script plays. Observations, reward and per-term metrics are agent 0's; the game's statistics are
+standing script); without one the standing script plays. With a `Walker` (legged.soccer.walker) the learner
+and the network opponents command velocities (3 actions) that the frozen walking skill turns into joints. Observations, reward and per-term metrics are agent 0's; the game's statistics are
 reported from the learner's side (goals_for, goals_against).
 """
 
@@ -16,9 +17,11 @@ from legged.envs.api import MjxEnv
 from legged.envs.physics import PhysicsView, Spawn
 from legged.sensors.raycam import render
 from legged.soccer.env import SoccerEnv
+from legged.soccer.observe import PROPRIO_SIZE
 from legged.soccer.opponents import Opponent, OpponentNet, opponent_step, scripted_opponent
 from legged.soccer.placo_player import load_tables
 from legged.soccer.vision import soccer_camera
+from legged.soccer.walker import COMMAND_SIZE, Walker
 
 LEARNER = 0
 """Agent index the learner controls."""
@@ -26,15 +29,17 @@ LEARNER = 0
 
 class LearnerView(MjxEnv):
     """Agent 0 of `game` as a Brax-style single-agent environment; `step(state, action, opponent=None)`
-    (the opponent drives every other robot; None: the script)."""
+    (the opponent drives every other robot; None: the script). With `walker` the actions are velocity
+    commands (legged.soccer.walker)."""
 
-    def __init__(self, game: SoccerEnv, net: OpponentNet = OpponentNet(), hidden: tuple[int, ...] = ()):
+    def __init__(self, game: SoccerEnv, net: OpponentNet = OpponentNet(), hidden: tuple[int, ...] = (),
+                 walker: Walker | None = None):
         if game.camera is not None:  # the learner's observations need its own camera only
             game.camera = game.camera.select([LEARNER])
-        self.game, self.net = game, net
+        self.game, self.net, self.walker = game, net, walker
         self.config, self.robot = game.config, game.robot
         self.mj_model, self.mjx_model = game.mj_model, game.mjx_model
-        self.default_opponent = scripted_opponent(game.policy_state_size, game.action_size, hidden)
+        self.default_opponent = scripted_opponent(game.policy_state_size, self.action_size, hidden)
         self.tables = load_tables()
         """The placo player's walk and kick (legged.soccer.placo_player)."""
         self._camera = None
@@ -53,20 +58,41 @@ class LearnerView(MjxEnv):
     def first_state(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
         return self._view(self.game.first_state(view, info, rng))
 
-    def prepare(self, state: State, action: jax.Array, opponent: Opponent | None = None):
-        """Controls of every robot: the learner's action, the others' from `opponent` (default: the script);
-        the actions `transition` sees carry the players' memories along."""
+    def prepare(self, state: State, action: jax.Array, opponent: Opponent | None = None,
+                teammate: Opponent | None = None):
+        """Controls of every robot: the learner's action, the other team's from `opponent` (default: the
+        script), the learner's teammates' (2v2) from `teammate` (default: `opponent`); the actions
+        `transition` sees carry the players' memories along."""
         opponent = self.default_opponent if opponent is None else opponent
         others = state.info["game_obs"]["privileged_state"][LEARNER + 1:, :self.game.policy_state_size]
-        memory = state.info["players"]
-        played, moved = opponent_step(self.net, opponent, others, memory[LEARNER + 1:], self.tables,
-                                      self.robot.action_scale)
-        actions = jnp.concatenate([action[None], played])
-        return self.game.joint_targets(actions), (actions, memory.at[LEARNER + 1:].set(moved))
+        memory, phase = state.info["players"][LEARNER + 1:], state.info["walker_phase"][LEARNER + 1:]
+        step = lambda who: opponent_step(self.net, who, others, memory, self.tables, self.robot.action_scale,
+                                         self.walker, phase)
+        played, moved = step(opponent)
+        if teammate is not None:
+            mate = jnp.asarray(self.game.layout.team[LEARNER + 1:] == self.game.layout.team[LEARNER])[:, None]
+            mates_played, mates_moved = step(teammate)
+            played, moved = jnp.where(mate, mates_played, played), jnp.where(mate, mates_moved, moved)
+        actions = jnp.concatenate([self.learner_actions(state, action)[None], played])
+        return self.game.joint_targets(actions), (actions, state.info["players"].at[LEARNER + 1:].set(moved))
+
+    def learner_actions(self, state: State, action: jax.Array) -> jax.Array:
+        """The learner's joint actions (20,): its action itself, or with a walker the walker's for its command."""
+        if self.walker is None:
+            return action
+        proprio = state.info["game_obs"]["state"][LEARNER:LEARNER + 1, :PROPRIO_SIZE]
+        return self.walker.actions(proprio, action[None], state.info["walker_phase"][LEARNER:LEARNER + 1])[0]
+
+    @property
+    def action_size(self) -> int:
+        """The learner's actions: its joints, or with a walker a velocity command."""
+        return COMMAND_SIZE if self.walker is not None else self.game.action_size
 
     def transition(self, state: State, view: PhysicsView, actions) -> State:
         actions, memory = actions
         info = dict(state.info, players=memory)
+        if self.walker is not None:
+            info["walker_phase"] = self.walker.advance(info["walker_phase"], self.dt)
         game_obs = info.pop("game_obs")
         game = State(view, game_obs, jnp.zeros(self.game.n_agents), state.done, {}, info)
         return self._view(self.game.transition(game, view, actions))

@@ -111,12 +111,18 @@ def placo_actions(tables, obs, memory, action_scale: float) -> tuple[jax.Array, 
     return jax.vmap(one)(obs, memory)
 
 
-def opponent_step(net: OpponentNet, opp: Opponent, obs, memory, tables, action_scale: float
-                  ) -> tuple[jax.Array, jax.Array]:
+def opponent_step(net: OpponentNet, opp: Opponent, obs, memory, tables, action_scale: float, walker=None,
+                  phase=None) -> tuple[jax.Array, jax.Array]:
     """(actions, next memories) of the robots an `Opponent` drives, from their features [n, obs] and their
-    player memories [n, MEMORY_SIZE] (only the placo player uses and changes them)."""
+    player memories [n, MEMORY_SIZE] (only the placo player uses and changes them). With a `walker`
+    (legged.soccer.walker) a network opponent commands velocities that it turns into joint actions, at the
+    robots' gait phases [n]."""
     played, moved = placo_actions(tables, obs, memory, action_scale)
-    stateless = opponent_actions(net, opp, obs, action_scale)
+    if walker is None:
+        stateless = opponent_actions(net, opp, obs, action_scale)
+    else:
+        walked = walker.actions(obs[..., :PROPRIO_SIZE], network_actions(net, opp, obs), phase)
+        stateless = jnp.where(opp.weight > 0.5, walked, scripted_actions(obs, action_scale))
     use_placo = (opp.weight < 0.5) & (opp.placo > 0.5)
     return jnp.where(use_placo, played, stateless), jnp.where(use_placo, moved, memory)
 

@@ -1,0 +1,100 @@
+"""Soccer players that command a frozen walking skill (legged.soccer.walker)."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from legged.envs.vector import VectorEnv
+from legged.soccer.learner import LearnerView
+from legged.soccer.observe import PROPRIO_SIZE
+from legged.soccer.opponents import OpponentNet, network_opponent
+from legged.soccer.skill_config import WalkSkillConfig
+from legged.soccer.walker import Walker
+from legged.tasks import make
+
+WALK = WalkSkillConfig()
+
+
+def _walker(layers, period=0.5) -> Walker:
+    n = layers[0][0].shape[0]
+    return Walker(policy=network_opponent(np.zeros(n), np.ones(n), layers), net=OpponentNet("elu"),
+                  command_low=WALK.command_low, command_high=WALK.command_high, period=period)
+
+
+def _action_of(command):
+    """The commanding action in [-1, 1] of a velocity command in the walk skill's range."""
+    low, high = np.asarray(WALK.command_low), np.asarray(WALK.command_high)
+    return 2.0 * (np.asarray(command) - low) / (high - low) - 1.0
+
+
+def test_the_walker_reads_what_the_walk_skill_observes():
+    """A walker whose network is the identity hands back its input: the walk skill's `state`, entry for entry."""
+    env = make("op3-walk")
+    vector = VectorEnv.of(env, 2, "native", 1)
+    batch = vector.reset(jax.random.PRNGKey(3))
+    for _ in range(7):  # some steps on: a non-zero gait clock
+        batch, _ = vector.step(batch, jnp.zeros((2, env.action_size)))
+    info, state = batch.state.info, np.asarray(batch.state.obs["state"])
+    command = np.asarray(jax.vmap(env.command)(info))
+    identity = _walker([(np.eye(state.shape[1], dtype=np.float32), np.zeros(state.shape[1], np.float32))],
+                       period=float(env.tables.gait.period))
+    rebuilt = identity.actions(jnp.asarray(state[:, :PROPRIO_SIZE]), jnp.asarray(_action_of(command)),
+                               info["gait_phase"])
+    np.testing.assert_allclose(np.asarray(rebuilt), state, atol=1e-5)
+    np.testing.assert_allclose(np.asarray(identity.command(jnp.array([-1.0, 0.0, 1.0]))),
+                               [WALK.command_low[0], 0.0, WALK.command_high[2]], atol=1e-6)
+
+
+def test_a_commanding_learner_and_its_opponents_walk_through_the_walker():
+    """A linear walker that copies the forward command into the first joint: the learner's 3 actions reach its
+    joints through it, a network opponent's too, and every robot's gait clock runs."""
+    size = PROPRIO_SIZE + 5
+    w = np.zeros((size, 20), np.float32)
+    w[PROPRIO_SIZE, 0] = 1.0                                   # joint 0 <- commanded vx
+    walker = _walker([(w, np.zeros(20, np.float32))])
+    view = LearnerView(make("soccer-1v1"), walker=walker)
+    assert view.action_size == 3
+    features = view.game.policy_state_size
+    opponent = network_opponent(np.zeros(features), np.ones(features),
+                                [(np.zeros((features, 3), np.float32), np.array([1.0, 0.0, 0.0], np.float32))])
+    vector = VectorEnv.of(view, 2, "native", 1)
+    batch = vector.reset(jax.random.PRNGKey(0))
+    batch, _ = vector.step(batch, jnp.asarray([[-1.0, 0.3, 0.0], [0.5, 0.0, 0.0]]), opponent)
+    joints = np.asarray(batch.state.info["last_action"])[:, :, 0]  # [env, robot] joint 0's action
+    vx_low, vx_high = WALK.command_low[0], WALK.command_high[0]
+    np.testing.assert_allclose(joints[:, 0], [vx_low, vx_low + 0.75 * (vx_high - vx_low)], atol=1e-6)
+    np.testing.assert_allclose(joints[:, 1], vx_high, atol=1e-6)  # the opponent commands vx = +1
+    np.testing.assert_allclose(np.asarray(batch.state.info["walker_phase"]), view.dt / 0.5, atol=1e-6)
+
+
+def test_a_walker_must_be_an_op3_walk_run(tmp_path):
+    from policies.config import ConfigError, TrainConfig
+    from policies.policy_io import load_walker
+    from policies.run_dir import RunDir
+
+    with pytest.raises(ConfigError, match="walker .* is for soccer tasks"):
+        TrainConfig(task="go1-flat", walker="somewhere").resolved()
+    with pytest.raises(ConfigError, match="selfplay.script"):
+        from policies.config import apply_overrides
+
+        apply_overrides(TrainConfig(task="soccer-1v1").resolved(), ["selfplay.script=goalie"]).resolved()
+    other = RunDir(tmp_path / "flat")
+    other.create(TrainConfig(task="go1-flat").resolved())
+    with pytest.raises(ValueError, match="a walker is an op3-walk run"):
+        load_walker(other.path)
+
+
+def test_in_2v2_the_teammate_and_the_other_team_play_from_their_own_opponents():
+    view = LearnerView(make("soccer-2v2"))
+    features = view.game.policy_state_size
+    constant = lambda value: network_opponent(np.zeros(features), np.ones(features), [
+        (np.zeros((features, 20), np.float32), np.full(20, value, np.float32))])
+    vector = VectorEnv.of(view, 1, "native", 1)
+    batch = vector.reset(jax.random.PRNGKey(1))
+    batch, _ = vector.step(batch, jnp.full((1, 20), 0.1), constant(0.5), constant(-0.5))
+    first_joint = np.asarray(batch.state.info["last_action"])[0, :, 0]
+    team = view.game.layout.team
+    expected = np.where(team == team[0], -0.5, 0.5)
+    expected[0] = 0.1
+    np.testing.assert_allclose(first_joint, expected, atol=1e-6)
