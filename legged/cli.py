@@ -103,7 +103,7 @@ def cmd_eval(args) -> int:
         ood_config(config.env)  # fails now for tasks without dynamics randomisation
     soccer = task_entry(config.task).kind == "soccer"
     if (args.opponent or args.teammate) and not soccer:
-        raise ValueError(f"--opponent and --teammate apply to soccer tasks; {config.task} has no opponents")
+        raise ValueError(f"--opponent (or --teammate) applies to soccer tasks; {config.task} has no opponents")
     policy, config = load_policy(args.run_dir, args.checkpoint)
     report = dict(physics=args.physics, seed=args.seed, checkpoint=str(policy.checkpoint), trained_steps=policy.step,
                   task=config.task)

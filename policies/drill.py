@@ -71,25 +71,19 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
     from policies.run_dir import RunDir
 
     run = None if player == "placo" else RunDir(player).load_config()
-    task = None if run is None else run.task
-    if task == "op3-walk":
-        config = WalkSkillConfig(command_seconds=drill.command_seconds, command_low=drill.command_low,
-                                 command_high=drill.command_high)
-    elif task == "op3-getup":
-        config = GetUpConfig(episode_seconds=drill.getup_seconds)
-    else:
-        config = SoccerConfig()
-    config = dataclasses.replace(config, randomization=dataclasses.replace(config.randomization, enabled=randomize))
-    if task == "op3-walk":
-        return skills.WalkSkillEnv(config)
-    if task == "op3-getup":
-        return skills.GetUpSkillEnv(config)
+    with_randomization = lambda config: dataclasses.replace(
+        config, randomization=dataclasses.replace(config.randomization, enabled=randomize))
+    if run is not None and run.task == "op3-walk":
+        return skills.WalkSkillEnv(with_randomization(WalkSkillConfig(
+            command_seconds=drill.command_seconds, command_low=drill.command_low, command_high=drill.command_high)))
+    if run is not None and run.task == "op3-getup":
+        return skills.GetUpSkillEnv(with_randomization(GetUpConfig(episode_seconds=drill.getup_seconds)))
     walker = None
     if run is not None and run.walker:  # a soccer player that commands a walking skill
         from policies.policy_io import load_walker
 
         walker = load_walker(run.walker)
-    return DrillEnv(drill, config, placo=player == "placo", walker=walker)
+    return DrillEnv(drill, with_randomization(SoccerConfig()), placo=player == "placo", walker=walker)
 
 
 def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "native", threads: int | None = None,

@@ -145,6 +145,9 @@ def load_walker(run_dir: str | Path):
         raise ValueError(f"walker {run_dir}: a walker is an op3-walk run trained with rsl/ppo; this run trained "
                          f"{config.task} with {config.backend}/{config.algo}")
     policy, _ = load_policy(run_dir)
+    from legged.robots.op3 import OP3
+
     return Walker(policy=snapshot_rsl_actor(policy.torch_module), net=OpponentNet(config.ppo.activation),
                   command_low=tuple(config.env.command_low), command_high=tuple(config.env.command_high),
-                  period=float(load_gait_table().period))
+                  gait=load_gait_table(), dt=float(config.env.ctrl_dt), residual=bool(config.env.residual),
+                  default_pose=tuple(float(q) for q in OP3.default_pose), action_scale=float(OP3.action_scale))

@@ -62,10 +62,10 @@ def test_placo_opponent_keeps_memory_per_robot(tables):
     size = PROPRIO_SIZE + 14
     obs = jnp.zeros((1, size)).at[0, PROPRIO_SIZE].set(1.0).at[0, PROPRIO_SIZE + 8].set(3.0)
     memory = initial_memory(1)
-    actions, moved = opponent_step(OpponentNet(), placo_opponent(size, 20), obs, memory, tables, 0.3)
+    actions, moved, _ = opponent_step(OpponentNet(), placo_opponent(size, 20), obs, memory, tables, 0.3)
     assert actions.shape == (1, 20) and float(moved[0, 1]) > 0.0       # its sequence clock advanced
     net = network_opponent(np.zeros(size), np.ones(size), [(np.zeros((size, 20)), np.ones(20))])
-    actions, kept = opponent_step(OpponentNet(), net, obs, memory, tables, 0.3)
+    actions, kept, _ = opponent_step(OpponentNet(), net, obs, memory, tables, 0.3)
     assert np.allclose(actions, 1.0) and np.array_equal(kept, memory)  # a network ignores the memory
 
 

@@ -26,11 +26,11 @@ def _env(task: str):
 def test_self_play_snapshots_become_opponents_without_recompiling(tmp_path, monkeypatch):
     env = _env("soccer-1v1")
     monkeypatch.setattr(training, "build_env", lambda config: env)
-    traces, real_step = [], env.step
-    monkeypatch.setattr(env, "step", lambda *args: (traces.append(len(args)), real_step(*args))[1])
+    traces, real_prepare = [], env.prepare  # native physics: the task's prepare is traced inside the step
+    monkeypatch.setattr(env, "prepare", lambda *args: (traces.append(len(args)), real_prepare(*args))[1])
     run_dir = tmp_path / "selfplay"
-    training.start_run("soccer-1v1", str(run_dir), num_envs=2, timesteps=30, progress=False,
-                       overrides=TINY + ["selfplay.snapshot_every=1", "selfplay.scripted_fraction=0.0"])
+    training.start_run("soccer-1v1", str(run_dir), num_envs=2, timesteps=30, progress=False, physics="native",
+                       threads=1, overrides=TINY + ["selfplay.snapshot_every=1", "selfplay.scripted_fraction=0.0"])
     records = RunDir(run_dir).metrics()
     assert [r["opponent"] for r in records][0] == -1  # the pool starts empty: the script plays
     assert all(r["opponent"] >= 0 for r in records[1:]) and [r["opponent_pool"] for r in records] == [1, 2, 3]

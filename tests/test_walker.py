@@ -16,10 +16,25 @@ from legged.tasks import make
 WALK = WalkSkillConfig()
 
 
-def _walker(layers, period=0.5) -> Walker:
+def _walker(layers, residual=False) -> Walker:
+    from legged.robots.op3 import OP3
+    from legged.soccer.gait_table import load_gait_table
+
     n = layers[0][0].shape[0]
     return Walker(policy=network_opponent(np.zeros(n), np.ones(n), layers), net=OpponentNet("elu"),
-                  command_low=WALK.command_low, command_high=WALK.command_high, period=period)
+                  command_low=WALK.command_low, command_high=WALK.command_high, gait=load_gait_table(),
+                  dt=WALK.ctrl_dt, residual=residual, default_pose=tuple(OP3.default_pose),
+                  action_scale=OP3.action_scale)
+
+
+def _walk_state(env, steps: int):
+    """A batch of 2 op3-walk episodes `steps` control steps in (zero actions), with their walker states."""
+    vector = VectorEnv.of(env, 2, "native", 1)
+    batch = vector.reset(jax.random.PRNGKey(3))
+    for _ in range(steps):
+        batch, _ = vector.step(batch, jnp.zeros((2, env.action_size)))
+    info = batch.state.info
+    return batch, jnp.concatenate([info["gait_phase"][:, None], info["gait_command"]], axis=1)
 
 
 def _action_of(command):
@@ -30,20 +45,33 @@ def _action_of(command):
 
 def test_the_walker_reads_what_the_walk_skill_observes():
     """A walker whose network is the identity hands back its input: the walk skill's `state`, entry for entry."""
-    env = make("op3-walk")
-    vector = VectorEnv.of(env, 2, "native", 1)
-    batch = vector.reset(jax.random.PRNGKey(3))
-    for _ in range(7):  # some steps on: a non-zero gait clock
-        batch, _ = vector.step(batch, jnp.zeros((2, env.action_size)))
-    info, state = batch.state.info, np.asarray(batch.state.obs["state"])
-    command = np.asarray(jax.vmap(env.command)(info))
-    identity = _walker([(np.eye(state.shape[1], dtype=np.float32), np.zeros(state.shape[1], np.float32))],
-                       period=float(env.tables.gait.period))
-    rebuilt = identity.actions(jnp.asarray(state[:, :PROPRIO_SIZE]), jnp.asarray(_action_of(command)),
-                               info["gait_phase"])
+    env = make("op3-walk", residual=False)
+    batch, walker_state = _walk_state(env, 7)  # some steps on: a non-zero gait clock
+    state = np.asarray(batch.state.obs["state"])
+    command = np.asarray(jax.vmap(env.command)(batch.state.info))
+    identity = _walker([(np.eye(state.shape[1], dtype=np.float32), np.zeros(state.shape[1], np.float32))])
+    rebuilt = identity.actions(jnp.asarray(state[:, :PROPRIO_SIZE]), jnp.asarray(_action_of(command)), walker_state)
     np.testing.assert_allclose(np.asarray(rebuilt), state, atol=1e-5)
     np.testing.assert_allclose(np.asarray(identity.command(jnp.array([-1.0, 0.0, 1.0]))),
                                [WALK.command_low[0], 0.0, WALK.command_high[2]], atol=1e-6)
+
+
+def test_a_residual_walker_adds_the_reference_and_keeps_the_skills_clock():
+    """A residual walker with a zero network plays what the residual walk skill plays for a zero action, and
+    its state steps as the skill's gait clock and filtered command do."""
+    env = make("op3-walk")
+    assert env.config.residual
+    batch, walker_state = _walk_state(env, 30)
+    info = batch.state.info
+    zero = _walker([(np.zeros((PROPRIO_SIZE + 5, 20), np.float32), np.zeros(20, np.float32))], residual=True)
+    action = jnp.asarray(_action_of(np.asarray(jax.vmap(env.command)(info))))
+    played = jax.vmap(lambda s: env.learner_actions(s, jnp.zeros(20))[0])(batch.state)
+    walked = zero.actions(batch.state.obs["state"][:, :PROPRIO_SIZE], action, walker_state)
+    np.testing.assert_allclose(np.asarray(walked), np.asarray(played), atol=1e-5)
+    assert float(jnp.abs(played).max()) > 0.1  # the reference moves the legs
+    advanced = jax.vmap(env._advance)(info)
+    expected = jnp.concatenate([advanced["gait_phase"][:, None], advanced["gait_command"]], axis=1)
+    np.testing.assert_allclose(np.asarray(zero.step(walker_state, action)), np.asarray(expected), atol=1e-5)
 
 
 def test_a_commanding_learner_and_its_opponents_walk_through_the_walker():
@@ -65,7 +93,8 @@ def test_a_commanding_learner_and_its_opponents_walk_through_the_walker():
     vx_low, vx_high = WALK.command_low[0], WALK.command_high[0]
     np.testing.assert_allclose(joints[:, 0], [vx_low, vx_low + 0.75 * (vx_high - vx_low)], atol=1e-6)
     np.testing.assert_allclose(joints[:, 1], vx_high, atol=1e-6)  # the opponent commands vx = +1
-    np.testing.assert_allclose(np.asarray(batch.state.info["walker_phase"]), view.dt / 0.5, atol=1e-6)
+    phase = np.asarray(batch.state.info["walker_state"])[:, :, 0]
+    np.testing.assert_allclose(phase, view.dt / float(walker.gait.period), atol=1e-6)  # every robot's clock runs
 
 
 def test_a_walker_must_be_an_op3_walk_run(tmp_path):

@@ -144,7 +144,7 @@ class DrillEnv(LearnerView):
 
     def prepare(self, state: State, action: jax.Array):
         """Controls: agent 0 from the given action (or the placo player), the parked robot at rest."""
-        memory = state.info["players"]
+        memory, walker_state = state.info["players"], state.info["walker_state"]
         if self.placo:
             features = state.info["game_obs"]["privileged_state"][0, :self.game.policy_state_size]
             request = request_from_features(self.tables, features) if self.drill.name == "empty-goal" else \
@@ -153,9 +153,9 @@ class DrillEnv(LearnerView):
             action = actions_of(targets, self.tables.default_pose, self.robot.action_scale)
             memory = memory.at[0].set(row)
         else:
-            action = self.learner_actions(state, action)
+            action, walker_state = self.learner_actions(state, action)
         actions = jnp.stack([action, jnp.zeros_like(action)])
-        return self.game.joint_targets(actions), (actions, memory)
+        return self.game.joint_targets(actions), (actions, memory, walker_state)
 
     def transition(self, state: State, view: PhysicsView, actions) -> State:
         b = read_bodies(self.game.layout, view.qpos, view.qvel)

@@ -37,6 +37,7 @@ from legged.soccer.rewards import reward_terms
 from legged.soccer.scene import build_soccer_scene
 from legged.soccer.task_config import SoccerConfig
 from legged.soccer.vision import soccer_camera
+from legged.soccer.walker import WALKER_STATE_SIZE
 
 
 class SoccerEnv(MjxEnv):
@@ -220,4 +221,4 @@ class SoccerEnv(MjxEnv):
         return dict(rng=rng, step=jnp.int32(0), last_action=zeros, last_qvel=zeros, score=jnp.zeros(2, jnp.int32),
                     fallen=jnp.zeros(self.n_agents, bool), out_of_play=jnp.int32(0), truncation=jnp.float32(0.0),
                     teleported=jnp.bool_(False), players=initial_memory(self.n_agents),
-                    walker_phase=jnp.zeros(self.n_agents, jnp.float32))
+                    walker_state=jnp.zeros((self.n_agents, WALKER_STATE_SIZE), jnp.float32))

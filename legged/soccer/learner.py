@@ -62,26 +62,36 @@ class LearnerView(MjxEnv):
                 teammate: Opponent | None = None):
         """Controls of every robot: the learner's action, the other team's from `opponent` (default: the
         script), the learner's teammates' (2v2) from `teammate` (default: `opponent`); the actions
-        `transition` sees carry the players' memories along."""
+        `transition` sees carry the players' memories and walker states along."""
         opponent = self.default_opponent if opponent is None else opponent
+        mine, walker_state = self.learner_actions(state, action)
         others = state.info["game_obs"]["privileged_state"][LEARNER + 1:, :self.game.policy_state_size]
-        memory, phase = state.info["players"][LEARNER + 1:], state.info["walker_phase"][LEARNER + 1:]
+        memory = state.info["players"][LEARNER + 1:]
+        theirs = None if self.walker is None else walker_state[LEARNER + 1:]
         step = lambda who: opponent_step(self.net, who, others, memory, self.tables, self.robot.action_scale,
-                                         self.walker, phase)
-        played, moved = step(opponent)
+                                         self.walker, theirs)
+        played, moved, stepped = step(opponent)
         if teammate is not None:
             mate = jnp.asarray(self.game.layout.team[LEARNER + 1:] == self.game.layout.team[LEARNER])[:, None]
-            mates_played, mates_moved = step(teammate)
-            played, moved = jnp.where(mate, mates_played, played), jnp.where(mate, mates_moved, moved)
-        actions = jnp.concatenate([self.learner_actions(state, action)[None], played])
-        return self.game.joint_targets(actions), (actions, state.info["players"].at[LEARNER + 1:].set(moved))
+            mates = step(teammate)
+            played, moved = jnp.where(mate, mates[0], played), jnp.where(mate, mates[1], moved)
+            stepped = None if stepped is None else jnp.where(mate, mates[2], stepped)
+        if stepped is not None:
+            walker_state = walker_state.at[LEARNER + 1:].set(stepped)
+        actions = jnp.concatenate([mine[None], played])
+        memory = state.info["players"].at[LEARNER + 1:].set(moved)
+        return self.game.joint_targets(actions), (actions, memory, walker_state)
 
-    def learner_actions(self, state: State, action: jax.Array) -> jax.Array:
-        """The learner's joint actions (20,): its action itself, or with a walker the walker's for its command."""
+    def learner_actions(self, state: State, action: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """(the learner's joint actions (20,), every robot's walker state with the learner's stepped): its
+        action itself, or with a walker the walker's joint actions for its command."""
+        walker_state = state.info["walker_state"]
         if self.walker is None:
-            return action
+            return action, walker_state
         proprio = state.info["game_obs"]["state"][LEARNER:LEARNER + 1, :PROPRIO_SIZE]
-        return self.walker.actions(proprio, action[None], state.info["walker_phase"][LEARNER:LEARNER + 1])[0]
+        mine = walker_state[LEARNER:LEARNER + 1]
+        joints = self.walker.actions(proprio, action[None], mine)[0]
+        return joints, walker_state.at[LEARNER].set(self.walker.step(mine, action[None])[0])
 
     @property
     def action_size(self) -> int:
@@ -89,10 +99,8 @@ class LearnerView(MjxEnv):
         return COMMAND_SIZE if self.walker is not None else self.game.action_size
 
     def transition(self, state: State, view: PhysicsView, actions) -> State:
-        actions, memory = actions
-        info = dict(state.info, players=memory)
-        if self.walker is not None:
-            info["walker_phase"] = self.walker.advance(info["walker_phase"], self.dt)
+        actions, memory, walker_state = actions
+        info = dict(state.info, players=memory, walker_state=walker_state)
         game_obs = info.pop("game_obs")
         game = State(view, game_obs, jnp.zeros(self.game.n_agents), state.done, {}, info)
         return self._view(self.game.transition(game, view, actions))

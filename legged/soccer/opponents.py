@@ -112,19 +112,21 @@ def placo_actions(tables, obs, memory, action_scale: float) -> tuple[jax.Array, 
 
 
 def opponent_step(net: OpponentNet, opp: Opponent, obs, memory, tables, action_scale: float, walker=None,
-                  phase=None) -> tuple[jax.Array, jax.Array]:
-    """(actions, next memories) of the robots an `Opponent` drives, from their features [n, obs] and their
-    player memories [n, MEMORY_SIZE] (only the placo player uses and changes them). With a `walker`
-    (legged.soccer.walker) a network opponent commands velocities that it turns into joint actions, at the
-    robots' gait phases [n]."""
+                  walker_state=None) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """(actions, next memories, next walker states) of the robots an `Opponent` drives, from their features
+    [n, obs] and their player memories [n, MEMORY_SIZE] (only the placo player uses and changes them). With a
+    `walker` (legged.soccer.walker) a network opponent commands velocities that it turns into joint actions,
+    from the robots' walker states [n, WALKER_STATE_SIZE] (None without a walker)."""
     played, moved = placo_actions(tables, obs, memory, action_scale)
     if walker is None:
-        stateless = opponent_actions(net, opp, obs, action_scale)
+        stateless, stepped = opponent_actions(net, opp, obs, action_scale), walker_state
     else:
-        walked = walker.actions(obs[..., :PROPRIO_SIZE], network_actions(net, opp, obs), phase)
+        command = network_actions(net, opp, obs)
+        walked = walker.actions(obs[..., :PROPRIO_SIZE], command, walker_state)
         stateless = jnp.where(opp.weight > 0.5, walked, scripted_actions(obs, action_scale))
+        stepped = walker.step(walker_state, command)
     use_placo = (opp.weight < 0.5) & (opp.placo > 0.5)
-    return jnp.where(use_placo, played, stateless), jnp.where(use_placo, moved, memory)
+    return jnp.where(use_placo, played, stateless), jnp.where(use_placo, moved, memory), stepped
 
 
 def stack_opponents(opponents) -> Opponent:

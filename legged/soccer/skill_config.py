@@ -65,6 +65,10 @@ class WalkSkillConfig(SkillConfig):
     """Upper bounds of the random commands."""
     walk_rewards: WalkRewards = WalkRewards()
     """Reward weights of the walking skill."""
+    residual: bool = True
+    """The policy's action is added to the reference's (the placo gait's targets at the clock and filtered
+    command, as actions): it starts out walking open loop and learns the corrections, which takes far fewer
+    samples than finding a gait from the imitation reward alone."""
 
     def __post_init__(self):
         super().__post_init__()

@@ -3,7 +3,8 @@
 - `op3-walk` (WalkSkillEnv): the walk drill made a training task. The policy reads its proprioception, the
   velocity command and a gait clock, and is rewarded for tracking the command and for imitating the
   reference: the placo gait table's servo targets at the clock's phase and at the command low-pass
-  filtered as the scripted player filters it (legged.soccer.gait_table).
+  filtered as the scripted player filters it (legged.soccer.gait_table). With `residual` (the default) its
+  actions are corrections added to the reference's.
 - `op3-getup` (GetUpSkillEnv): the getup drill made a training task. The robot starts lying and is
   rewarded for raising its torso, turning upright, and standing in the default pose.
 
@@ -27,6 +28,7 @@ from legged.soccer.drills import DrillConfig, DrillEnv
 from legged.soccer.gait_table import advance_phase, filter_command, gait_targets
 from legged.soccer.learner import LEARNER
 from legged.soccer.observe import PROPRIO_SIZE, Bodies, read_bodies
+from legged.soccer.placo_player import actions_of
 from legged.soccer.skill_config import LEG_JOINTS, GetUpConfig, WalkSkillConfig
 
 
@@ -103,6 +105,13 @@ class WalkSkillEnv(SkillEnv):
     def reference(self, info: dict) -> jnp.ndarray:
         """The placo gait's servo targets (20,) at the episode's gait clock and filtered command."""
         return gait_targets(self.tables.gait, info["gait_phase"], info["gait_command"])
+
+    def learner_actions(self, state: State, action: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
+        """The robot's joint actions: the policy's, plus the reference's when the skill is `residual`."""
+        joints, walker_state = super().learner_actions(state, action)
+        if self.config.residual:
+            joints = joints + actions_of(self.reference(state.info), self.tables.default_pose, self.robot.action_scale)
+        return joints, walker_state
 
     def _skill_info(self) -> dict:
         return dict(gait_phase=jnp.float32(0.0), gait_command=jnp.zeros(3, jnp.float32))
