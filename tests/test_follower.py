@@ -115,3 +115,24 @@ def test_navigation_geometry():
     mujoco.mju_euler2Quat(quat, np.array([0.1, -0.2, 0.7]), "XYZ")  # extrinsic: Rz(yaw) Ry(pitch) Rx(roll)
     pose = _pose_of(np.concatenate([[1.0, 2.0, 0.3], quat]))
     np.testing.assert_allclose(pose, [1.0, 2.0, 0.3, 0.1, -0.2, 0.7], atol=1e-9)
+
+
+@pytest.mark.parametrize("bootstraps", [False, True])
+def test_reaching_the_goal_ends_as_a_truncation_where_asked(confined, bootstraps):
+    """Velocity and skills tasks end at the goal as a truncation (their value is bootstrapped, so stopping
+    just short of the goal to keep collecting tracking reward no longer pays); the follower's do not."""
+    from legged.envs.confined import ConfinedConfig, ConfinedEnv
+
+    env = ConfinedEnv(ConfinedConfig(mode="velocity", success_bootstraps=bootstraps), terrain=confined.env.terrain)
+    native = NativeEnvs(env, 2, 1)
+    state = native.reset(jax.random.split(jax.random.PRNGKey(0), 2))
+    here = state.pipeline_state.qpos[:, :2]
+    goal = state.info["goal"].at[:, :2].set(here)  # the goal where the robots stand
+    state = state.replace(info=dict(state.info, goal=goal))
+    state = native.step(state, jnp.zeros((2, 12)))
+    assert np.all(np.asarray(state.metrics["success"]) == 1.0) and np.all(np.asarray(state.done) == 1.0)
+    assert np.all(np.asarray(state.info["truncation"]) == float(bootstraps))
+    from legged.tasks import default_config
+
+    assert default_config("confined-velocity").success_bootstraps and default_config("confined-skills").success_bootstraps
+    assert not default_config("confined-waypoints").success_bootstraps

@@ -277,7 +277,8 @@ class LeggedEnv(MjxEnv, abc.ABC):
         if cfg.only_positive_rewards:
             reward = jnp.maximum(reward, 0.0)
         reward = jnp.where(bad, 0.0, reward)
-        info["truncation"] = (time_out & ~fell & ~success & ~bad).astype(jnp.float32)
+        ended_well = (time_out | success) if getattr(cfg, "success_bootstraps", False) else (time_out & ~success)
+        info["truncation"] = (ended_well & ~fell & ~bad).astype(jnp.float32)
         info["last_action"], info["last_qvel"] = action, qd
         obs, info = self._observe(data, info, k_noise)
         metrics = {f"reward/{k}": v for k, v in terms.items()}
