@@ -9,7 +9,7 @@ Two kinds of teacher:
   - rma (Kumar et al. 2021, phase 2): the student's history encoder regresses the teacher's latent z_p of
     the same step, and the student acts with the teacher's head, copied and frozen, fed the state normalised
     as the teacher normalised it (its normaliser is the teacher's, frozen).
-- a state soccer player (soccer-1v1 or soccer-2v2, `--algo ppo`), whose student plays the vision task
+- a state soccer player (soccer-1v1, `--algo ppo`), whose student plays the vision task
   (`--task soccer-1v1-vision`) from proprioception and the head camera; the teacher reads the state features
   the vision task gives as `features`. Methods: dagger (as above) and kl (the anchors' KL-regularised RL,
   policies.teacher_kl). A teacher that commands a walker (`walker`) passes it on: the student commands it too.
@@ -97,8 +97,10 @@ def teacher_config(path: Path, student_task: str | None = None) -> TrainConfig:
             raise ConfigError(f"teacher {path} has no checkpoint yet")
         return config
     if config.algo != "teacher":
+        vision = vision_student_task(config.task)
+        hint = f" (or distil this soccer player into its vision student: --task {vision})" if vision else ""
         raise ConfigError(f"teacher {path} was trained with --algo {config.algo}; a teacher reads privileged "
-                          f"observations: train one with `legged train {config.task} --algo teacher`")
+                          f"observations: train one with `legged train {config.task} --algo teacher`{hint}")
     if not run.checkpoints():
         raise ConfigError(f"teacher {path} has no checkpoint yet")
     return config

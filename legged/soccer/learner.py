@@ -3,8 +3,9 @@
 The learner controls agent 0 (home0, attacking +x). Every other robot (in 2v2 the learner's teammate too)
 acts from an `Opponent` passed to `step` as data (a frozen self-play snapshot, the placo player or the
 standing script); without one the standing script plays. With a `Walker` (legged.soccer.walker) the learner
-and the network opponents command velocities (3 actions) that the frozen walking skill turns into joints. Observations, reward and per-term metrics are agent 0's; the game's statistics are
-reported from the learner's side (goals_for, goals_against).
+and the network opponents command velocities (3 actions) that the frozen walking skill turns into joints.
+Observations, reward and per-term metrics are agent 0's; the game's statistics are reported from the
+learner's side (goals_for, goals_against).
 """
 
 from __future__ import annotations
