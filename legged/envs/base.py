@@ -121,6 +121,12 @@ class LeggedEnv(MjxEnv, abc.ABC):
         """Extra privileged observation of the task (default: none)."""
         return jnp.zeros(0)
 
+    @property
+    def success_is_truncation(self) -> bool:
+        """Whether reaching the task's goal ends the episode as a truncation (its value bootstrapped) rather
+        than as a terminal state; default no."""
+        return False
+
     def _task_truncated(self, data, info: dict) -> jax.Array:
         """Whether the episode must end now without being the policy's fault (a truncation, like the time
         limit), e.g. the robot walked off the terrain; default never."""
@@ -277,7 +283,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
         if cfg.only_positive_rewards:
             reward = jnp.maximum(reward, 0.0)
         reward = jnp.where(bad, 0.0, reward)
-        ended_well = (time_out | success) if getattr(cfg, "success_bootstraps", False) else (time_out & ~success)
+        ended_well = (time_out | success) if self.success_is_truncation else (time_out & ~success)
         info["truncation"] = (ended_well & ~fell & ~bad).astype(jnp.float32)
         info["last_action"], info["last_qvel"] = action, qd
         obs, info = self._observe(data, info, k_noise)

@@ -203,6 +203,10 @@ class ConfinedEnv(LeggedEnv):
         scans = jnp.concatenate([ceiling, floor])
         return scans, jnp.full_like(scans, self.config.noise.height_scan)
 
+    @property
+    def success_is_truncation(self) -> bool:
+        return self.config.success_bootstraps
+
     def _task_privileged(self, data, info):
         base = data.xpos[self._trunk]
         return jnp.stack([base[2] - self.floor_height(base[:2]), self.ceiling_height(base[:2]) - base[2]])

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 
 from legged.soccer.gait_table import GaitTable, advance_phase, filter_command, gait_targets
 from legged.soccer.opponents import Opponent, OpponentNet, network_actions
+from legged.soccer.placo_player import actions_of
 
 COMMAND_SIZE = 3
 """A commanding player's action: (vx, vy, yaw rate), each in [-1, 1] of the walker's command range."""
@@ -62,7 +63,7 @@ class Walker:
         out = network_actions(self.net, self.policy, inputs)
         if self.residual:
             targets = jax.vmap(lambda s: gait_targets(self.gait, s[0], s[1:]))(state)
-            out = out + (targets - jnp.asarray(self.default_pose)) / self.action_scale
+            out = out + actions_of(targets, jnp.asarray(self.default_pose), self.action_scale)
         return out
 
     def step(self, state: jax.Array, action: jax.Array) -> jax.Array:
