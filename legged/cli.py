@@ -42,6 +42,23 @@ def cmd_bench_soak(args) -> int:
     return 0
 
 
+def cmd_bench_encoder(args) -> int:
+    import torch
+
+    from policies.bench_encoder import bench_encoders
+
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    records = bench_encoders(args.steps, args.batch)
+    if args.json:
+        print(json.dumps(records, indent=1))
+    else:
+        for r in records:
+            print(f"H={r['history_steps']:4d}  encoder {r['encoder_s']:.3f} s  conv1d {r['conv1d_s']:.3f} s "
+                  f"({r['conv1d_over_unfold']:.2f}x)  head {r['head_s']:.3f} s  encoder/head {r['encoder_over_head']:.1f}x")
+    return 0
+
+
 def cmd_bench_soccer(args) -> int:
     from legged.soccer.bench import bench_soccer, print_soccer_table
 
@@ -297,6 +314,13 @@ def build_parser() -> argparse.ArgumentParser:
     bs.add_argument("--json", action="store_true", help="print a JSON list, one object per measurement")
     bs.add_argument("--quiet", action="store_true", help="no progress messages")
     bs.set_defaults(fn=cmd_bench_soccer)
+    bn = bsub.add_parser("encoder", help="a PPO mini-batch's history encoder: forward + backward seconds beside the "
+                                         "conv1d layout and the actor's head")
+    bn.add_argument("--steps", type=ints(1, 1000), default=[20, 25, 50], help="comma-separated history lengths")
+    bn.add_argument("--batch", type=bounded(int, 1, 10**6), default=6144, help="mini-batch size")
+    bn.add_argument("--threads", type=THREADS, default=0, metavar="N", help="torch threads (default: torch's)")
+    bn.add_argument("--json", action="store_true", help="print a JSON list, one object per history length")
+    bn.set_defaults(fn=cmd_bench_encoder)
     tr = sub.add_parser("train", help="train a policy (Brax PPO or rsl-rl PPO) into a run directory")
     tr.add_argument("task", nargs="?", help="task name (legged tasks)")
     tr.add_argument("--backend", choices=["rsl", "brax"], default="rsl")

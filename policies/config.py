@@ -80,8 +80,9 @@ class LatentConfig:
     """Latent-variable actors (policies.latent_models): the teacher's privileged encoder, the students' history
     encoders, and HIB's information bottleneck (policies.hib)."""
 
-    history_steps: int = 50
-    """Steps of `state` history the students read (1 s at 50 Hz); copied into the env's `history_steps`."""
+    history_steps: int = 25
+    """Steps of `state` history the students read (0.5 s at 50 Hz, about one trot cycle); copied into the env's
+    `history_steps`."""
     latent_dim: int = 16
     """Size of the latent z (the teacher's z_p and the students' z)."""
     encoder_hidden: tuple[int, ...] = (256, 128)

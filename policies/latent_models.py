@@ -25,8 +25,11 @@ NOISE_GROUP = "latent_noise"
 class HistoryConv(torch.nn.Module):
     """A history encoder shaped like RMA's adaptation module: each step's features embedded (linear +
     activation), then 1-D convolutions over time (`channels` wide; kernels 8, 5, 5, strides 4, 1, 1, as many
-    as the history is long enough for; they run from the newest step back), flattened, and a linear output.
-    Input: [..., steps * features], oldest step first."""
+    as the history is long enough for), flattened, and a linear output. The windows end at the newest step:
+    where the strides leave steps over, they are the oldest. Input: [..., steps * features], oldest step first.
+
+    A convolution is a linear layer on each window (`Tensor.unfold`), kept in [batch, time, channels] layout:
+    on the CPU this trains about twice as fast as `Conv1d`, which needs channel-first copies."""
 
     LAYERS = ((8, 4), (5, 1), (5, 1))
     """(kernel, stride) of the convolutions over time."""
@@ -34,21 +37,24 @@ class HistoryConv(torch.nn.Module):
     def __init__(self, steps: int, features: int, output_dim: int, activation: str = "elu", channels: int = 32):
         super().__init__()
         self.steps, self.features = steps, features
-        self.embed = torch.nn.Sequential(torch.nn.Linear(features, channels), resolve_nn_activation(activation))
-        layers, length = [], steps
+        self.embed = torch.nn.Linear(features, channels)
+        self.activation = resolve_nn_activation(activation)
+        self.windows, self.convs, length = [], torch.nn.ModuleList(), steps
         for kernel, stride in self.LAYERS:
             if length < kernel:
                 break
-            layers += [torch.nn.Conv1d(channels, channels, kernel, stride), resolve_nn_activation(activation)]
+            self.windows.append((kernel, stride, (length - kernel) % stride))  # the last: oldest steps left over
+            self.convs.append(torch.nn.Linear(channels * kernel, channels))
             length = (length - kernel) // stride + 1
-        self.convs = torch.nn.Sequential(*layers)
         self.output = torch.nn.Linear(channels * length, output_dim)
 
     def forward(self, history: torch.Tensor) -> torch.Tensor:
         lead = history.shape[:-1]
-        x = self.embed(history.reshape(-1, self.steps, self.features)).transpose(1, 2)  # [B, channels, steps]
-        x = x.flip(-1)  # newest first: where the strides leave steps over, they are the oldest
-        return self.output(self.convs(x).flatten(1)).reshape(*lead, -1)
+        x = self.activation(self.embed(history.reshape(-1, self.steps, self.features)))  # [B, steps, channels]
+        for conv, (kernel, stride, skip) in zip(self.convs, self.windows):
+            windows = x[:, skip:].unfold(1, kernel, stride)                            # [B, length, channels, kernel]
+            x = self.activation(conv(windows.reshape(*windows.shape[:2], -1)))
+        return self.output(x.flatten(1)).reshape(*lead, -1)
 
 
 class LatentActor(MLPModel):

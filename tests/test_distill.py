@@ -158,10 +158,11 @@ def test_rma_student_starts_as_the_teacher_and_resumes(teacher_run, tmp_path, mo
 
 
 def test_history_conv_encoder_shapes():
+    from policies.bench_encoder import conv1d_reference
     from policies.latent_models import HistoryConv
 
     encoder = HistoryConv(steps=50, features=42, output_dim=16)
-    assert sum(isinstance(m, torch.nn.Conv1d) for m in encoder.convs) == 3  # lengths 50 -> 11 -> 7 -> 3
+    assert len(encoder.convs) == 3  # lengths 50 -> 11 -> 7 -> 3
     history = torch.randn(5, 7, 50 * 42)
     assert encoder(history).shape == (5, 7, 16)
     newest_changed = history.clone()
@@ -170,5 +171,6 @@ def test_history_conv_encoder_shapes():
     oldest_changed = history.clone()
     oldest_changed[..., :2 * 42] += 1.0  # the strides leave the two oldest steps over
     assert torch.allclose(encoder(history), encoder(oldest_changed))
+    assert torch.allclose(conv1d_reference(encoder, history), encoder(history), atol=1e-5)  # the same convolutions
     short = HistoryConv(steps=3, features=42, output_dim=4)  # too short for any convolution: embed and flatten
     assert len(short.convs) == 0 and short(torch.randn(2, 3 * 42)).shape == (2, 4)
