@@ -170,10 +170,17 @@ def cmd_convert(args) -> int:
 
 
 def cmd_plot(args) -> int:
-    from policies.plots import plot_run
+    from policies.plots import plot_runs
 
-    path = plot_run(args.run_dir, args.y, args.x, args.out, args.hline)
+    path = plot_runs(args.run_dir, args.y, args.x, args.out, args.hline)
     print(json.dumps({"plot": str(path)}) if args.json else f"[plot] wrote {path}")
+    return 0
+
+
+def cmd_table(args) -> int:
+    from policies.tables import eval_table
+
+    print(eval_table(args.run_dir, args.files, args.metrics))
     return 0
 
 
@@ -389,14 +396,22 @@ def build_parser() -> argparse.ArgumentParser:
     cv.add_argument("--json", action="store_true")
     cv.set_defaults(fn=cmd_convert)
 
-    pt = sub.add_parser("plot", help="plot a metric of a run's metrics.jsonl into a PNG")
-    pt.add_argument("run_dir")
+    pt = sub.add_parser("plot", help="plot a metric of runs' metrics.jsonl into a PNG (one line per run)")
+    pt.add_argument("run_dir", nargs="+", help="one run directory, or several to compare")
     pt.add_argument("--y", default="episode_return", help="metric to plot (a numeric field of metrics.jsonl)")
     pt.add_argument("--x", default="step", choices=["step", "wall_s", "iteration"], help="horizontal axis")
     pt.add_argument("--hline", type=float, default=None, help="draw a dashed horizontal line (a goal) here")
-    pt.add_argument("--out", default=None, help="PNG file (default RUN_DIR/<metric>.png)")
+    pt.add_argument("--out", default=None, help="PNG file (default: the first RUN_DIR/<metric>.png)")
     pt.add_argument("--json", action="store_true")
     pt.set_defaults(fn=cmd_plot)
+
+    tb = sub.add_parser("table", help="runs' saved evaluations side by side, as a markdown table")
+    tb.add_argument("run_dir", nargs="+", help="run directories, one row each")
+    tb.add_argument("--files", type=lambda s: [f for f in s.split(",") if f], default=["eval_native.json"],
+                    help="comma-separated evaluation JSON files in each run (e.g. eval_native.json,eval_ood_native.json)")
+    tb.add_argument("--metrics", type=lambda s: [m for m in s.split(",") if m],
+                    default=["episode_return", "tracking_error_mps", "fall_rate"], help="comma-separated report fields")
+    tb.set_defaults(fn=cmd_table)
 
     ex = sub.add_parser("export", help="export a run's policy (ONNX) and check it against the framework")
     ex.add_argument("run_dir")

@@ -1,4 +1,4 @@
-"""Training curves as PNG files (pillow only), for run directories and reports: `legged plot RUN`."""
+"""Training curves as PNG files (pillow only), for run directories and reports: `legged plot RUN [RUN ...]`."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ from pathlib import Path
 
 from PIL import Image, ImageDraw
 
-COLOURS = ((31, 119, 180), (214, 39, 40), (44, 160, 44), (148, 103, 189))
+COLOURS = ((31, 119, 180), (214, 39, 40), (44, 160, 44), (148, 103, 189), (255, 127, 14), (140, 86, 75),
+           (227, 119, 194), (23, 190, 207))
 """Line colours, in series order."""
 
 
@@ -63,9 +64,20 @@ def line_plot(series: dict, path: str | Path, xlabel: str, ylabel: str, title: s
     return path
 
 
-def plot_run(run_dir: str | Path, y: str, x: str = "step", out: str | Path | None = None,
-             hline: float | None = None) -> Path:
-    """Plot metric `y` of a run's metrics.jsonl against `x` (step, wall_s, iteration) into a PNG."""
+def plot_runs(run_dirs: list, y: str, x: str = "step", out: str | Path | None = None,
+              hline: float | None = None) -> Path:
+    """Plot metric `y` of several runs (one line each, labelled by the run's folder name) against `x` into one
+    PNG (default: the first run's folder, <metric>.png)."""
+    series = dict(_run_series(run_dir, y, x) for run_dir in run_dirs)
+    if len(series) < len(run_dirs):
+        raise ValueError(f"two of the runs share a folder name: {', '.join(str(r) for r in run_dirs)}")
+    xlabel = "wall-clock minutes of training" if x == "wall_s" else x
+    title = f"{Path(run_dirs[0]).name}: {y}" if len(run_dirs) == 1 else y
+    return line_plot(series, out or Path(run_dirs[0]) / f"{y}.png", xlabel, y, title=title, hline=hline)
+
+
+def _run_series(run_dir: str | Path, y: str, x: str) -> tuple[str, tuple[list, list]]:
+    """(the run's folder name, (xs, ys)) of metric `y` against `x`."""
     from policies.run_dir import RunDir
 
     run = RunDir(run_dir)
@@ -80,10 +92,8 @@ def plot_run(run_dir: str | Path, y: str, x: str = "step", out: str | Path | Non
         records = [r for r in run.metrics() if isinstance(r.get("step"), (int, float))]
     else:
         xs = [r[x] for r in records]
-    xlabel = "wall-clock minutes of training" if x == "wall_s" else x
     number = lambda v: float(v) if isinstance(v, (int, float)) or v in ("nan", "inf", "-inf") else None
-    return line_plot({y: (xs, [number(r.get(y)) for r in records])}, out or Path(run_dir) / f"{y}.png", xlabel, y,
-                     title=f"{Path(run_dir).name}: {y}", hline=hline)
+    return Path(run_dir).name, (xs, [number(r.get(y)) for r in records])
 
 
 def _wall_seconds(records: list[dict]) -> list[float]:

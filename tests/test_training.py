@@ -223,3 +223,47 @@ def test_pickled_checkpoints_are_refused_until_converted_by_the_user(trained_run
     assert report["converted"] == [str(path)]
     pool = load_checkpoint(path)["opponent_pool"]
     assert isinstance(pool["snapshots"][0]["mean"], np.ndarray) and pool["snapshots"][0]["mean"].sum() == 3.0
+
+
+def test_plot_overlays_runs_one_colour_each(trained_run, tmp_path, capsys):
+    import json
+    import shutil
+
+    from PIL import Image
+
+    from legged.cli import main
+    from policies.plots import COLOURS
+
+    run_dir = trained_run[0]
+    other = shutil.copytree(run_dir, tmp_path / "other")
+    records = RunDir(other).metrics()
+    (other / "metrics.jsonl").write_text("".join(json.dumps(dict(r, episode_return=r["episode_return"] + 100.0)) + "\n"
+                                                 for r in records))  # a second run whose line lies elsewhere
+    out = tmp_path / "both.png"
+    assert main(["plot", str(run_dir), str(other), "--y", "episode_return", "--out", str(out)]) == 0
+    pixels = {colour for _, colour in Image.open(out).convert("RGB").getcolors(maxcolors=1 << 20)}
+    assert COLOURS[0] in pixels and COLOURS[1] in pixels and COLOURS[2] not in pixels  # a line (and label) per run
+    assert main(["plot", str(run_dir), str(shutil.copytree(run_dir, tmp_path / "x" / run_dir.name))]) == 2
+    assert "share a folder name" in capsys.readouterr().err
+
+
+def test_table_puts_saved_evaluations_side_by_side(tmp_path, capsys):
+    import json
+
+    from legged.cli import main
+
+    for name, ret, ood in (("teacher", 1234.5, 900.0), ("hib", 1100.25, 950.0)):
+        (tmp_path / name).mkdir()
+        for file, value in (("eval_native.json", ret), ("eval_ood_native.json", ood)):
+            (tmp_path / name / file).write_text(json.dumps({"episode_return": value, "fall_rate": 0.02,
+                                                            "trained_steps": 40_000_000}))
+    runs = [str(tmp_path / "teacher"), str(tmp_path / "hib")]
+    assert main(["table", *runs, "--files", "eval_native.json,eval_ood_native.json",
+                 "--metrics", "episode_return,fall_rate"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == ("| run | steps | episode_return (eval_native) | fall_rate (eval_native) | "
+                        "episode_return (eval_ood_native) | fall_rate (eval_ood_native) |")
+    assert lines[2] == "| teacher | 40,000,000 | 1,234 | 0.02 | 900 | 0.02 |"
+    assert lines[3] == "| hib | 40,000,000 | 1,100 | 0.02 | 950 | 0.02 |"
+    assert main(["table", *runs, "--metrics", "win_rate"]) == 2
+    assert "no win_rate in eval_native.json" in capsys.readouterr().err
