@@ -110,10 +110,10 @@ class DistillConfig:
     """The teacher's run directory (trained with --algo teacher)."""
     learning_rate: float = 1e-3
     """Adam step size of the student."""
-    num_learning_epochs: int = 1
-    """Passes over each rollout."""
-    gradient_length: int = 12
-    """Rollout steps whose losses are summed per gradient step."""
+    num_learning_epochs: int = 5
+    """Passes over each rollout (5, as PPO's: 20 gradient steps per rollout of 24 steps, with gradient_length 6)."""
+    gradient_length: int = 6
+    """Rollout steps whose losses are summed per gradient step (6 x 1,024 environments = PPO's mini-batch)."""
     student_noise_std: float = 0.1
     """dagger: standard deviation of the student's exploration noise while it acts."""
     kl_weight: float = 1.0

@@ -129,8 +129,8 @@ def evaluate(env, policy, episodes: int, seed: int, physics: str = "mjx", num_en
     at a time, each contributing its first episode only (counting the first episodes to finish would favour
     short ones, i.e. falls). The episodes' reset keys depend on `seed` and `num_envs` only, not on the physics
     engine: both engines start the same episodes. per_world (confined tasks): episode k plays world k of the
-    terrain (see `confined_eval_config`). `probe`, a list, receives (policy features, privileged state) of every
-    10th step of the episodes (see `latent_probe`). `env_args` go to every step (a soccer opponent)."""
+    terrain (see `confined_eval_config`). `probe`, a list, receives (policy features, privileged state, episode ids)
+    of every 10th step of the episodes (see `latent_probe`). `env_args` go to every step (a soccer opponent)."""
     num_envs = min(num_envs, episodes)
     vector = VectorEnv.of(env, num_envs, physics, threads)
     finals: list[dict] = []
@@ -146,7 +146,8 @@ def evaluate(env, policy, episodes: int, seed: int, physics: str = "mjx", num_en
             if probe is not None and steps % 10 == 0 and getattr(policy, "features", None) is not None:
                 features = policy.features({k: np.asarray(v) for k, v in obs.items()})
                 if features is not None:
-                    probe.append((features[pending], np.asarray(obs["privileged_state"])[pending]))
+                    probe.append((features[pending], np.asarray(obs["privileged_state"])[pending],
+                                  first + np.flatnonzero(pending)))  # the episodes' ids
             steps += 1
             batch, result = vector.step(batch, jax.numpy.asarray(policy.act(actor_observation(obs, policy.inputs))),
                                         *env_args)
@@ -172,7 +173,6 @@ def latent_probe(samples: list, layout: dict) -> float | None:
     slices = privileged_slices(layout)
     if not samples or not slices:
         return None
-    features = np.concatenate([f for f, _ in samples])
-    privileged = np.concatenate([p for _, p in samples])
+    features, privileged, episodes = (np.concatenate(parts) for parts in zip(*samples))
     targets = np.concatenate([privileged[:, s] for s in slices], axis=1)
-    return probe_r2(features, targets)
+    return probe_r2(features, targets, episodes)

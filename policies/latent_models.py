@@ -8,6 +8,10 @@ One rsl-rl model class serves the teacher and the students (rsl-rl builds it fro
 - the RMA student encodes the `history` deterministically and acts with the teacher's head.
 With `privileged_embedding`, the model also holds HIB's embedding of `privileged_state` for the InfoNCE bound
 (policies.hib); it is trained with the actor but never used to act.
+
+`privileged_state` begins with a clean copy of `state` (legged.envs.base: observation_layout); the teacher's
+encoder and HIB's embedding read only what follows it (velocities, contacts, randomised dynamics, terrain), so
+that z_p, and the InfoNCE match, carry what the state cannot tell rather than a denoised copy of it.
 """
 
 from __future__ import annotations
@@ -71,7 +75,10 @@ class LatentActor(MLPModel):
         activation = mlp_kwargs.get("activation", "elu")
         self.state_dim = obs["state"].shape[-1]
         self.latent_dim, self.gaussian = latent_dim, gaussian
-        encoded, out = obs[groups[1]].shape[-1], latent_dim * (2 if gaussian else 1)
+        # where the encoded part of [state, group] starts: past the state, and past privileged_state's copy of it
+        self.encoded_from = self.state_dim * (2 if groups[1] == "privileged_state" else 1)
+        encoded = obs["state"].shape[-1] + obs[groups[1]].shape[-1] - self.encoded_from
+        out = latent_dim * (2 if gaussian else 1)
         if groups[1] == "history" and history_encoder == "conv":
             self.encoder = HistoryConv(encoded // self.state_dim, self.state_dim, out, activation)
         else:
@@ -82,7 +89,7 @@ class LatentActor(MLPModel):
             self.distribution.init_mlp_weights(self.mlp)
         self.embedding = None
         if privileged_embedding:
-            size = obs["privileged_state"].shape[-1]
+            size = obs["privileged_state"].shape[-1] - self.state_dim
             self.embedding_normalizer = EmpiricalNormalization(size)
             self.embedding = MLP(size, privileged_embedding, encoder_hidden, activation)
             self.projection = MLP(latent_dim, privileged_embedding, [max(encoder_hidden[-1], latent_dim)], activation)
@@ -91,7 +98,7 @@ class LatentActor(MLPModel):
     def encode(self, obs: TensorDict) -> tuple[torch.Tensor, torch.Tensor | None, torch.Tensor]:
         """(mean of z, its log std or None when deterministic, the normalised state)."""
         x = self.obs_normalizer(torch.cat([obs[g] for g in self.obs_groups], dim=-1))
-        out = self.encoder(x[..., self.state_dim:])
+        out = self.encoder(x[..., self.encoded_from:])
         if not self.gaussian:
             return out, None, x[..., :self.state_dim]
         mean, log_std = out.split(self.latent_dim, dim=-1)
@@ -108,11 +115,11 @@ class LatentActor(MLPModel):
     def update_normalization(self, obs: TensorDict) -> None:
         super().update_normalization(obs)
         if self.embedding is not None and self.obs_normalization:
-            self.embedding_normalizer.update(obs["privileged_state"])
+            self.embedding_normalizer.update(obs["privileged_state"][..., self.state_dim:])
 
     def embed_privileged(self, privileged: torch.Tensor) -> torch.Tensor:
-        """HIB's embedding of the privileged state (for the InfoNCE bound)."""
-        return self.embedding(self.embedding_normalizer(privileged))
+        """HIB's embedding of the privileged state past its copy of the state (for the InfoNCE bound)."""
+        return self.embedding(self.embedding_normalizer(privileged[..., self.state_dim:]))
 
     def as_onnx(self, verbose: bool = False) -> torch.nn.Module:
         return DeployedLatentActor(self)
@@ -135,11 +142,12 @@ class DeployedLatentActor(torch.nn.Module):
         self.output = (model.distribution.as_deterministic_output_module() if model.distribution is not None
                        else torch.nn.Identity())
         self.state_dim, self.latent_dim, self.gaussian = model.state_dim, model.latent_dim, model.gaussian
+        self.encoded_from = model.encoded_from
         self.input_names = list(model.obs_groups)
 
     def _state_and_latent(self, state: torch.Tensor, encoded: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         x = self.normalizer(torch.cat([state, encoded], dim=-1))
-        return x[..., :self.state_dim], self.encoder(x[..., self.state_dim:])[..., :self.latent_dim]
+        return x[..., :self.state_dim], self.encoder(x[..., self.encoded_from:])[..., :self.latent_dim]
 
     def latent(self, state: torch.Tensor, encoded: torch.Tensor) -> torch.Tensor:
         """Mean z."""

@@ -5,13 +5,19 @@ from __future__ import annotations
 import numpy as np
 
 
-def probe_r2(features: np.ndarray, targets: np.ndarray, ridge: float = 1e-3) -> float | None:
+def probe_r2(features: np.ndarray, targets: np.ndarray, groups: np.ndarray | None = None,
+             ridge: float = 1e-3) -> float | None:
     """Mean R^2, over the target dimensions that vary, of a ridge regression (with bias) from `features` to
-    `targets`, fitted on the even samples and scored on the odd ones; None when no target varies."""
+    `targets`, fitted on the samples of even `groups` (e.g. episode ids: one episode's samples never fall on
+    both sides) and scored on the odd ones; without groups, the even and odd samples. None when no target
+    varies or a side is (nearly) empty."""
     features, targets = np.asarray(features, np.float64), np.asarray(targets, np.float64)
-    fit, test = slice(0, None, 2), slice(1, None, 2)
+    groups = np.arange(len(features)) if groups is None else np.asarray(groups)
+    fit, test = groups % 2 == 0, groups % 2 == 1
+    if fit.sum() < 2 or test.sum() < 2:
+        return None
     varying = targets[fit].std(0) > 1e-9
-    if not varying.any() or len(features) < 4:
+    if not varying.any():
         return None
     mean, std = features[fit].mean(0), features[fit].std(0) + 1e-8
     x = np.concatenate([(features - mean) / std, np.ones((len(features), 1))], axis=1)

@@ -9,7 +9,7 @@ import torch
 from tensordict import TensorDict
 
 from legged.cli import main
-from policies.algorithms import attach_information_bottleneck, build_algorithm
+from policies.algorithms import attach_information_bottleneck, build_algorithm, privileged_slices
 from policies.config import ConfigError, TrainConfig, apply_overrides
 from policies.hib import gaussian_kl, info_nce
 from policies.latent_models import NOISE_GROUP, deployed_actor
@@ -19,8 +19,8 @@ from policies.run_dir import RunDir
 
 H = 3
 """History steps of these tests' students."""
-SIZES = {"state": 42, "privileged_state": 111, "history": 42 * H}
-LAYOUT = {"privileged_state": [("state", 42), ("base_lin_vel", 3), ("base_ang_vel", 3), ("contact_forces", 7),
+SIZES = {"state": 45, "privileged_state": 114, "history": 45 * H}
+LAYOUT = {"privileged_state": [("state", 45), ("base_lin_vel", 3), ("base_ang_vel", 3), ("contact_forces", 7),
                                ("dynamics", 4), ("com", 3), ("motor_strength", 12), ("task", 37)]}
 TINY = ["ppo.actor_hidden=[32, 32]", "ppo.critic_hidden=[32, 32]", "latent.encoder_hidden=[32]", "latent.latent_dim=4",
         f"latent.history_steps={H}", "ppo.num_steps_per_env=4", "ppo.num_mini_batches=2", "latent.infonce_samples=16"]
@@ -33,7 +33,8 @@ def config(algo: str, **changes) -> TrainConfig:
 def observations(n: int, rng: np.random.Generator, dynamics: np.ndarray | None = None) -> TensorDict:
     groups = {k: torch.as_tensor(rng.normal(size=(n, size)), dtype=torch.float32) for k, size in SIZES.items()}
     if dynamics is not None:  # the randomised parameters of each environment's episode
-        groups["privileged_state"][:, 58:77] = torch.as_tensor(dynamics, dtype=torch.float32)
+        start, stop = privileged_slices(LAYOUT)[0].start, privileged_slices(LAYOUT)[-1].stop
+        groups["privileged_state"][:, start:stop] = torch.as_tensor(dynamics, dtype=torch.float32)
     groups[NOISE_GROUP] = torch.as_tensor(rng.normal(size=(n, 4)), dtype=torch.float32)
     return TensorDict(groups, batch_size=[n])
 
@@ -48,12 +49,41 @@ def test_gaussian_kl_and_infonce():
     assert float(info_nce(torch.ones(4, 2), torch.ones(4, 2), 1.0)) == pytest.approx(np.log(4.0))
 
 
+def test_same_dynamics_is_exact_on_full_mini_batches():
+    from policies.hib import same_dynamics
+
+    rng = np.random.default_rng(1)
+    episodes = rng.integers(0, 50, size=512)  # 512 anchors: where cdist switches to its matrix-product path
+    dynamics = torch.as_tensor(rng.normal(1.0, 2.0, size=(50, 19)), dtype=torch.float32)[episodes]
+    assert torch.equal(same_dynamics(dynamics), torch.as_tensor(episodes[:, None] == episodes[None]))
+
+
+def test_privileged_encoders_skip_the_state_copy():
+    rng = np.random.default_rng(3)
+    obs = observations(8, rng)
+    for algo in ("teacher", "hib"):
+        alg = build_algorithm(config(algo), obs, 8, 12, "cpu")
+        actor = alg.get_policy() if hasattr(alg, "get_policy") else alg.actor
+        moved, kept = obs.clone(), obs.clone()
+        kept["privileged_state"][:, :SIZES["state"]] += 5.0    # the clean copy of the state
+        moved["privileged_state"][:, SIZES["state"]:] += 5.0   # what only the simulator knows
+        if algo == "teacher":
+            z = lambda o: actor.encode(o)[0]
+        else:
+            z = lambda o: actor.embed_privileged(o["privileged_state"])
+        assert torch.allclose(z(obs), z(kept)) and not torch.allclose(z(obs), z(moved))
+
+
 def test_probe_sees_linear_information_only():
     rng = np.random.default_rng(0)
     features = rng.normal(size=(400, 6))
     assert probe_r2(features, features[:, :3] @ rng.normal(size=(3, 2))) > 0.99
     assert probe_r2(features, rng.normal(size=(400, 2))) < 0.1
     assert probe_r2(features, np.ones((400, 2))) is None  # nothing varies: nothing to probe
+    episodes = np.repeat(np.arange(40), 10)  # features that only name the episode hold no dynamics
+    names, dynamics = np.eye(40)[episodes], rng.normal(size=(40, 2))[episodes]
+    assert probe_r2(names, dynamics) > 0.99  # split by sample, each episode sits on both sides: a leak
+    assert probe_r2(names, dynamics, episodes) < 0.1  # split by episode: held-out episodes are unknown
 
 
 @pytest.mark.parametrize("algo", ["teacher", "hib", "hib-no-ib", "history"])

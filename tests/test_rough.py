@@ -10,7 +10,7 @@ import pytest
 
 from legged.envs.config import RandomizationConfig
 from legged.envs.native import NativeEnvs
-from legged.envs.rough import RoughConfig, RoughEnv
+from legged.envs.rough import RoughConfig, RoughEnv, commanded_displacement
 from legged.worlds import WorldError
 from legged.worlds.rough import KINDS, RoughTerrainConfig, rough_terrain
 from policies.evaluate import held_out, ood_config
@@ -78,24 +78,31 @@ def test_history_pushes_and_privileged_terrain(rough):
             assert np.allclose(native.physics.batch.bind("qvel")[:, :2], np.asarray(state.pipeline_state.qvel)[:, :2])
             assert np.abs(np.asarray(state.pipeline_state.qvel)[:, :2] - before[:, :2]).max() > 0.05
     assert pushed == [False, False, False, False, True, False]  # every 0.1 s = 5 control steps
+    names = [n for n, _ in env.observation_layout()["state"]]
+    assert names[:2] == ["gravity", "gyro"]  # the IMU's angular velocity, body frame, clean in the privileged copy
+    assert np.allclose(np.asarray(state.obs["privileged_state"])[:, 3:6], np.asarray(state.pipeline_state.qvel)[:, 3:6])
     feet = np.asarray(jax.vmap(env.feet_positions)(state.pipeline_state))
     heights = np.asarray(state.obs["privileged_state"])[:, -37:-1].reshape(4, 4, 9)
     floor = env.terrain.floor_at(feet[..., :2].reshape(-1, 2)).reshape(4, 4)
     assert np.allclose(heights[:, :, 4], feet[..., 2] - floor, atol=1e-4)  # the centre sample: under each foot
 
 
-def test_curriculum_moves_by_distance_walked(rough):
+def test_curriculum_moves_by_distance_walked_against_what_was_asked(rough):
     env, _ = rough  # 2 m tiles; 100 steps of 0.02 s at 1 m/s ask for 2 m
-    info = lambda walked, fell, level=1, speed=1.0: {
+    info = lambda walked, fell, level=1, speed=1.0, yaw_rate=0.0: {
         "spawn_xy": jnp.zeros(2), "base_xy": jnp.array([walked, 0.0]), "level": jnp.int32(level),
-        "truncation": jnp.float32(0.0 if fell else 1.0), "command": jnp.array([speed, 0.0, 0.0]),
+        "truncation": jnp.float32(0.0 if fell else 1.0), "command": jnp.array([speed, 0.0, yaw_rate]),
         "step": jnp.int32(100)}
-    assert int(env.carry(info(1.5, False))["level"]) == 2               # more than half a tile: up
-    assert int(env.carry(info(1.5, True))["level"]) == 0                # a fall: down
-    assert int(env.carry(info(0.9, False))["level"]) == 0               # less than half of the 2 m asked: down
-    assert int(env.carry(info(0.7, False, speed=0.5))["level"]) == 1    # half of the 1 m asked, under half a tile
-    assert int(env.carry(info(0.0, True, level=0))["level"]) == 0       # never below the easiest
+    level = lambda *args, **kw: int(env.carry(info(*args, **kw))["level"])
+    assert level(1.5, False) == 2                    # 80% of half a tile (of the 2 m asked): up
+    assert level(1.5, True) == 0                     # a fall: down
+    assert level(0.7, False) == 0                    # less than half of the 2 m asked: down
+    assert level(0.7, False, speed=0.5) == 1         # 70% of the 1 m asked: stays
+    assert level(0.05, False, yaw_rate=np.pi) == 1   # a full circle asks for no displacement: stays
+    assert level(0.0, True, level=0) == 0            # never below the easiest
     assert int(env.carry(info(1.5, False))["tile"]) == -1
+    assert float(commanded_displacement(jnp.array([0.6, 0.8, 1.0]), 2.0)) == pytest.approx(2 * np.sin(1.0), rel=1e-6)
+    assert float(commanded_displacement(jnp.array([0.6, 0.8, 0.0]), 2.0)) == pytest.approx(2.0, rel=1e-6)
 
 
 def test_held_out_and_ood_configs():

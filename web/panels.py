@@ -97,7 +97,7 @@ def numeric_keys(records: list[dict]) -> list[str]:
 
 
 LATENT_DIAGNOSTICS = (("KL(q(z|h) || N(0, I)), HIB's I(H; Z) bound", "hib_kl"),
-                      ("log N - InfoNCE, HIB's I(Z; S^p) bound", "hib_mi_lower_bound"),
+                      ("log K - InfoNCE, HIB's I(Z; S^p) bound", "hib_mi_lower_bound"),
                       ("linear probe R^2: latent -> randomised dynamics", "probe_r2"))
 """The latent's diagnostics (title, metrics.jsonl key), each plotted once the run logs it."""
 

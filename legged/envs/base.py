@@ -320,12 +320,14 @@ class LeggedEnv(MjxEnv, abc.ABC):
         qd = self.joint_velocities(data)
         ext, ext_noise = self._exteroception(data, info)
         cmd = self._command(data, info)
-        state = [("gravity", rotate_inv(rot, jnp.array([0.0, 0.0, -1.0])), jnp.full(3, noise.gravity)),
-                 ("command", cmd, jnp.zeros_like(cmd)),
-                 ("joint_pos", q, jnp.full_like(q, noise.joint_pos)),
-                 ("joint_vel", qd, jnp.full_like(qd, noise.joint_vel)),
-                 ("last_action", info["last_action"], jnp.zeros(self.action_size)),
-                 ("exteroception", ext, ext_noise)]
+        state = [("gravity", rotate_inv(rot, jnp.array([0.0, 0.0, -1.0])), jnp.full(3, noise.gravity))]
+        if self.config.gyro_in_state:
+            state.append(("gyro", data.qvel[3:6], jnp.full(3, noise.gyro)))
+        state += [("command", cmd, jnp.zeros_like(cmd)),
+                  ("joint_pos", q, jnp.full_like(q, noise.joint_pos)),
+                  ("joint_vel", qd, jnp.full_like(qd, noise.joint_vel)),
+                  ("last_action", info["last_action"], jnp.zeros(self.action_size)),
+                  ("exteroception", ext, ext_noise)]
         dr = info["dr"]
         privileged = [("base_lin_vel", rotate_inv(rot, data.qvel[0:3])), ("base_ang_vel", data.qvel[3:6]),
                       ("contact_forces", data.contact_force / self._weight),

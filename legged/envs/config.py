@@ -46,6 +46,8 @@ class NoiseConfig:
     """Noise on joint velocities, rad/s."""
     height_scan: float = 0.02
     """Noise on height-scan values, metres."""
+    gyro: float = 0.2
+    """Noise on the IMU's angular velocity (with `EnvConfig.gyro_in_state`), rad/s."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -73,6 +75,10 @@ class EnvConfig:
     """Domain randomisation."""
     noise: NoiseConfig = NoiseConfig()
     """Observation noise."""
+    gyro_in_state: bool = False
+    """`state` also holds the IMU's angular velocity (body frame; right after the projected gravity), as a real
+    robot measures it.
+    Off for the tasks whose shipped policies were trained without it; on for go1-rough."""
     history_steps: int = 0
     """When > 0, the observation `history` holds the last this many `state` vectors (oldest first, the current
     one last): what a deployable student remembers."""

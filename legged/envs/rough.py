@@ -2,9 +2,9 @@
 
 The task where privileged information matters (issue 16): `state` is what the robot can measure
 (proprioception, IMU gravity, command; noisy), `privileged_state` adds what it cannot: base velocity, contact
-forces, the randomised dynamics and the terrain heights around each foot. A terrain curriculum (legged_gym's)
-moves each environment a level up after it walked more than half a tile, and down after a fall or after
-walking less than half of what its command asked.
+forces, the randomised dynamics and the terrain heights around each foot. A terrain curriculum (legged_gym's,
+measured against what each command asks: see `RoughEnv.carry`) moves each environment a level up after it
+covered what its command asked, and down after a fall or after covering less than half of it.
 """
 
 from __future__ import annotations
@@ -44,6 +44,17 @@ class RoughConfig(FlatConfig):
     """Domain randomisation (on: friction, masses, centre of mass, motor strength, PD gains, pushes)."""
     noise: NoiseConfig = NoiseConfig(enabled=True)
     """Observation noise on `state` (on)."""
+    gyro_in_state: bool = True
+    """`state` holds the IMU's angular velocity (a real robot measures it; the yaw rate is commanded)."""
+
+
+def commanded_displacement(command: jax.Array, seconds: jax.Array) -> jax.Array:
+    """Straight-line distance from start after `seconds` of tracking a constant body-frame (vx, vy, yaw rate)
+    command perfectly: an arc of radius |v| / |w|, whose chord is 2 |v| |sin(w t / 2)| / |w| (|v| t as w -> 0)."""
+    speed, rate = jnp.linalg.norm(command[:2]), jnp.abs(command[2])
+    turning = rate > 1e-4
+    return speed * jnp.where(turning, 2 * jnp.abs(jnp.sin(rate * seconds / 2)) / jnp.where(turning, rate, 1.0),
+                             seconds)
 
 
 class RoughEnv(VelocityTrackingEnv):
@@ -67,12 +78,15 @@ class RoughEnv(VelocityTrackingEnv):
         return np.arange(self._n_levels)
 
     def carry(self, info):
-        """Curriculum: up after walking more than half a tile without falling; down after a fall or after
-        walking less than half of what the command asked."""
+        """Curriculum: up after covering, without falling, at least 80% of what the command asked (but no more
+        than half a tile), when it asked for at least a quarter of a tile; down after a fall or after covering
+        less than half of what it asked. What a command asks is the straight-line distance a perfect tracker
+        covers: the chord of the arc that a constant (vx, vy, yaw rate) command draws."""
         walked = jnp.linalg.norm(info["base_xy"] - info["spawn_xy"])
         fell = info["truncation"] < 0.5
-        asked = jnp.linalg.norm(info["command"][:2]) * info["step"] * self.dt
-        up = (walked > self.config.terrain.tile_size / 2) & ~fell
+        asked = commanded_displacement(info["command"], info["step"] * self.dt)
+        tile = self.config.terrain.tile_size
+        up = (asked >= tile / 4) & (walked > 0.8 * jnp.minimum(asked, tile / 2)) & ~fell
         return next_level(info["level"], up, fell | (walked < 0.5 * asked))
 
     def _spawn_pose(self, rng, carry):
