@@ -13,8 +13,9 @@ minimise  -I(Z; S^p) + alpha * I(H; Z), with the standard bounds:
 
 `loss = infonce_weight * InfoNCE + kl_weight * KL` is added to PPO's loss on every mini-batch, so the encoder
 learns from both (one stage). z is sampled with noise that the rollout stored (policies.latent_models). With
-`ib=False` (the hib-no-ib ablation) the encoder learns from the RL loss only: no KL, and InfoNCE reaches only
-the embedding and projection heads (z is detached), so its curve still measures what z holds.
+`ib=False` (the hib-no-ib ablation) the encoder learns from the RL loss only: no KL, and InfoNCE trains only
+the embedding and projection heads, on a detached z and with an optimiser of their own, so its curve still
+measures what z holds.
 
 rsl-rl's PPO adds an extension's loss to its own through the symmetry seam (`augment_batch`,
 `compute_loss(actor, batch, n)`, `use_mirror_loss`, `mirror_loss_coeff`); this class fills that seam, so
@@ -65,6 +66,10 @@ class InformationBottleneck:
         self.generator = torch.Generator().manual_seed(seed)
         self._sums = {"kl": 0.0, "infonce": 0.0, "mi_lower_bound": 0.0}
         self._count = 0
+        self._heads = None
+
+    head_learning_rate = 1e-3
+    """Adam step size of the InfoNCE heads in hib-no-ib (their optimiser's state is not checkpointed)."""
 
     def augment_batch(self, batch, original_batch_size: int) -> None:
         """No augmentation (the seam's first call)."""
@@ -85,9 +90,22 @@ class InformationBottleneck:
         self._sums["infonce"] += float(nce.detach())
         self._sums["mi_lower_bound"] += float(candidates.float().log().mean()) - float(nce.detach())
         self._count += 1
-        if not self.ib:  # the ablation: InfoNCE trains only the probe's two heads (z is detached), no KL
-            return self.infonce_weight * nce
+        if not self.ib:  # the ablation: InfoNCE trains only the probe's two heads, apart from PPO's step
+            self._step_heads(actor, self.infonce_weight * nce)
+            return torch.zeros((), device=nce.device)
         return self.infonce_weight * nce + self.kl_weight * kl
+
+    def _step_heads(self, actor: LatentActor, loss: torch.Tensor) -> None:
+        """One Adam step of the embedding and projection heads on `loss` (hib-no-ib), with an optimiser of
+        their own: inside PPO's loss, their gradients would count in its gradient-norm clipping of the actor
+        and so scale the RL gradient, which the ablation must leave alone."""
+        params = list(actor.embedding.parameters()) + list(actor.projection.parameters())
+        if self._heads is None:
+            self._heads = torch.optim.Adam(params, lr=self.head_learning_rate)
+        self._heads.zero_grad()
+        loss.backward()
+        self._heads.step()
+        self._heads.zero_grad()
 
     def means(self) -> dict:
         """Mean KL, InfoNCE and the bound log K - InfoNCE since the last call (then reset)."""

@@ -96,6 +96,7 @@ def test_ppo_algorithms_update_on_synthetic_rollouts(algo):
     if algo.startswith("hib"):
         attach_information_bottleneck(alg, cfg, LAYOUT, seed=0)
         encoder = [p.clone() for p in alg.actor.encoder.parameters()]
+        heads = [p.clone() for p in list(alg.actor.embedding.parameters()) + list(alg.actor.projection.parameters())]
     alg.train_mode()
     obs = observations(n, rng, dynamics)
     for _ in range(cfg.ppo.num_steps_per_env):
@@ -113,6 +114,8 @@ def test_ppo_algorithms_update_on_synthetic_rollouts(algo):
         assert set(diagnostics) == {"hib_kl", "hib_infonce", "hib_mi_lower_bound"}
         assert all(np.isfinite(v) for v in diagnostics.values())
         assert any(not torch.equal(a, b) for a, b in zip(encoder, alg.actor.encoder.parameters()))
+        after = list(alg.actor.embedding.parameters()) + list(alg.actor.projection.parameters())
+        assert all(not torch.equal(a, b) for a, b in zip(heads, after))  # InfoNCE trains its heads in both
     deployed = deployed_actor(alg.get_policy())
     inputs = [obs[g] for g in deployed.input_names] if hasattr(deployed, "input_names") else [obs["state"]]
     alg.get_policy().eval()
