@@ -132,9 +132,10 @@ def load_policy(run_dir: str | Path, checkpoint: str | Path | None = None) -> tu
     return loader(config, path), config
 
 
-def load_walker(run_dir: str | Path):
+def load_walker(run_dir: str | Path, getup_run: str | Path = ""):
     """The frozen walking skill of an op3-walk run (`legged.soccer.walker.Walker`), for soccer players that
-    command velocities; ValueError naming what is wrong when the run is not one."""
+    command velocities, with the get-up skill of an op3-getup run when one is named; ValueError naming what is
+    wrong when a run is not what it should be."""
     from legged.soccer.gait_table import load_gait_table
     from legged.soccer.opponents import OpponentNet
     from legged.soccer.walker import Walker
@@ -144,10 +145,20 @@ def load_walker(run_dir: str | Path):
     if config.task != "op3-walk" or config.backend != "rsl" or config.algo != "ppo":
         raise ValueError(f"walker {run_dir}: a walker is an op3-walk run trained with rsl/ppo; this run trained "
                          f"{config.task} with {config.backend}/{config.algo}")
+    getup = getup_net = None
+    if getup_run:  # both runs checked before either is loaded
+        getup_config = RunDir(getup_run).load_config()
+        if getup_config.task != "op3-getup" or getup_config.backend != "rsl" or getup_config.algo != "ppo":
+            raise ValueError(f"getup {getup_run}: a get-up skill is an op3-getup run trained with rsl/ppo; this run "
+                             f"trained {getup_config.task} with {getup_config.backend}/{getup_config.algo}")
     policy, _ = load_policy(run_dir)
     from legged.robots.op3 import OP3
 
+    if getup_run:
+        getup = snapshot_rsl_actor(load_policy(getup_run)[0].torch_module)
+        getup_net = OpponentNet(getup_config.ppo.activation)
     return Walker(policy=snapshot_rsl_actor(policy.torch_module), net=OpponentNet(config.ppo.activation),
+                  getup=getup, getup_net=getup_net,
                   command_low=tuple(config.env.command_low), command_high=tuple(config.env.command_high),
                   gait=load_gait_table(), dt=float(config.env.ctrl_dt), residual=bool(config.env.residual),
                   default_pose=tuple(float(q) for q in OP3.default_pose), action_scale=float(OP3.action_scale))

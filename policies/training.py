@@ -26,7 +26,7 @@ def build_env(config: TrainConfig, progress: bool = True):
     if config.walker:
         from policies.policy_io import load_walker
 
-        walker = load_walker(config.walker)
+        walker = load_walker(config.walker, config.getup)
     return learner_env(entry, env, config.ppo.activation, config.ppo.actor_hidden, walker)
 
 

@@ -1,5 +1,7 @@
 """Soccer players that command a frozen walking skill (legged.soccer.walker)."""
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -34,7 +36,7 @@ def _walk_state(env, steps: int):
     for _ in range(steps):
         batch, _ = vector.step(batch, jnp.zeros((2, env.action_size)))
     info = batch.state.info
-    return batch, jnp.concatenate([info["gait_phase"][:, None], info["gait_command"]], axis=1)
+    return batch, jnp.concatenate([info["gait_phase"][:, None], info["gait_command"], jnp.zeros((2, 1))], axis=1)
 
 
 def _action_of(command):
@@ -70,8 +72,9 @@ def test_a_residual_walker_adds_the_reference_and_keeps_the_skills_clock():
     np.testing.assert_allclose(np.asarray(walked), np.asarray(played), atol=1e-5)
     assert float(jnp.abs(played).max()) > 0.1  # the reference moves the legs
     advanced = jax.vmap(env._advance)(info)
-    expected = jnp.concatenate([advanced["gait_phase"][:, None], advanced["gait_command"]], axis=1)
-    np.testing.assert_allclose(np.asarray(zero.step(walker_state, action)), np.asarray(expected), atol=1e-5)
+    expected = jnp.concatenate([advanced["gait_phase"][:, None], advanced["gait_command"], jnp.zeros((2, 1))], axis=1)
+    proprio = batch.state.obs["state"][:, :PROPRIO_SIZE]
+    np.testing.assert_allclose(np.asarray(zero.step(walker_state, action, proprio)), np.asarray(expected), atol=1e-5)
 
 
 def test_a_commanding_learner_and_its_opponents_walk_through_the_walker():
@@ -112,6 +115,10 @@ def test_a_walker_must_be_an_op3_walk_run(tmp_path):
     other.create(TrainConfig(task="go1-flat").resolved())
     with pytest.raises(ValueError, match="a walker is an op3-walk run"):
         load_walker(other.path)
+    walk = RunDir(tmp_path / "walk")
+    walk.create(TrainConfig(task="op3-walk").resolved())
+    with pytest.raises(ValueError, match="a get-up skill is an op3-getup run"):
+        load_walker(walk.path, other.path)
 
 
 def test_in_2v2_the_teammate_and_the_other_team_play_from_their_own_opponents():
@@ -127,3 +134,37 @@ def test_in_2v2_the_teammate_and_the_other_team_play_from_their_own_opponents():
     expected = np.where(team == team[0], -0.5, 0.5)
     expected[0] = 0.1
     np.testing.assert_allclose(first_joint, expected, atol=1e-6)
+
+
+def test_a_fallen_robot_gets_up_through_the_getup_skill_then_walks_again():
+    """With a get-up policy the walker hands a robot tilted past 60 degrees to it, ignores its command and
+    restarts its clock, and gives it back once it stands upright near its default pose."""
+    walker = _walker([(np.zeros((PROPRIO_SIZE + 5, 20), np.float32), np.zeros(20, np.float32))])
+    getup = network_opponent(np.zeros(PROPRIO_SIZE), np.ones(PROPRIO_SIZE),
+                             [(np.zeros((PROPRIO_SIZE, 20), np.float32), np.full(20, 0.7, np.float32))])
+    walker = dataclasses.replace(walker, getup=getup, getup_net=OpponentNet("elu"))
+    proprio = lambda up_z, pose: jnp.asarray([[0.0, -np.sqrt(1 - up_z ** 2), -up_z, 0, 0, 0] + [pose] * 20 +
+                                              [0.0] * 40], jnp.float32)
+    command = jnp.ones((1, 3))
+    walking = jnp.asarray([[0.3, 0.1, 0.0, 0.2, 0.0]])
+    assert float(jnp.abs(walker.actions(proprio(1.0, 0.0), command, walking)).max()) == 0.0  # the walk net
+    stays = walker.step(walking, command, proprio(0.8, 0.0))
+    assert float(stays[0, 4]) == 0.0 and float(stays[0, 0]) > 0.3  # 37 degrees of tilt: still walking
+    fallen = walker.step(walking, command, proprio(0.2, 0.0))
+    np.testing.assert_allclose(np.asarray(fallen), [[0.0, 0.0, 0.0, 0.0, 1.0]])  # getting up, clock restarted
+    np.testing.assert_allclose(np.asarray(walker.actions(proprio(0.2, 0.0), command, fallen)), 0.7, atol=1e-6)
+    crouched = walker.step(fallen, command, proprio(0.95, 0.5))  # upright but far from the standing pose
+    assert float(crouched[0, 4]) == 1.0
+    stood = walker.step(fallen, command, proprio(0.95, 0.1))
+    assert float(stood[0, 4]) == 0.0 and float(stood[0, 0]) > 0.0  # walking again, the clock running
+
+
+def test_getup_needs_a_walker_and_games_that_go_on_after_a_fall():
+    from policies.config import ConfigError, TrainConfig, apply_overrides
+
+    with pytest.raises(ConfigError, match="getup .* needs walker"):
+        TrainConfig(task="soccer-1v1", getup="up").resolved()
+    with pytest.raises(ConfigError, match="end_on_fall=never"):
+        TrainConfig(task="soccer-1v1", getup="up", walker="walk").resolved()
+    assert apply_overrides(TrainConfig(task="soccer-1v1").resolved(),
+                           ["getup=up", "walker=walk", "env.end_on_fall=never"]).resolved().getup == "up"

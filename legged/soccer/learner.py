@@ -92,7 +92,7 @@ class LearnerView(MjxEnv):
         proprio = state.info["game_obs"]["state"][LEARNER:LEARNER + 1, :PROPRIO_SIZE]
         mine = walker_state[LEARNER:LEARNER + 1]
         joints = self.walker.actions(proprio, action[None], mine)[0]
-        return joints, walker_state.at[LEARNER].set(self.walker.step(mine, action[None])[0])
+        return joints, walker_state.at[LEARNER].set(self.walker.step(mine, action[None], proprio)[0])
 
     @property
     def action_size(self) -> int:

@@ -124,7 +124,7 @@ def opponent_step(net: OpponentNet, opp: Opponent, obs, memory, tables, action_s
         command = network_actions(net, opp, obs)
         walked = walker.actions(obs[..., :PROPRIO_SIZE], command, walker_state)
         stateless = jnp.where(opp.weight > 0.5, walked, scripted_actions(obs, action_scale))
-        stepped = walker.step(walker_state, command)
+        stepped = walker.step(walker_state, command, obs[..., :PROPRIO_SIZE])
     use_placo = (opp.weight < 0.5) & (opp.placo > 0.5)
     return jnp.where(use_placo, played, stateless), jnp.where(use_placo, moved, memory), stepped
 

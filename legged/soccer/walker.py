@@ -6,8 +6,13 @@ its action is a (vx, vy, yaw rate) command, which the walker turns into the 20 j
 rate, reading the robot's own proprioception, the command and its gait clock, as it did in training (a
 residual walker adds the placo gait's reference at the clock and the filtered command, as in training). Like
 an `Opponent`, the walker is arrays (no Python objects in the step); each robot keeps its walker state, one
-row of `WALKER_STATE_SIZE` floats (gait phase, low-pass filtered command), in the game's
+row of `WALKER_STATE_SIZE` floats (gait phase, low-pass filtered command, getting-up flag), in the game's
 `info['walker_state']`.
+
+With a frozen `op3-getup` policy as well (`Walker.getup`), a fall need not end the game: a robot tilted past
+`GETUP_START_UP_Z` hands its joints to the get-up policy until it stands upright near its default pose again
+(`GETUP_END_UP_Z`, `GETUP_END_POSE_RAD`, read from its own proprioception, as on a real robot); meanwhile its
+commands are ignored and its gait clock and filtered command restart from zero.
 """
 
 from __future__ import annotations
@@ -23,8 +28,14 @@ from legged.soccer.placo_player import actions_of
 
 COMMAND_SIZE = 3
 """A commanding player's action: (vx, vy, yaw rate), each in [-1, 1] of the walker's command range."""
-WALKER_STATE_SIZE = 4
-"""Per robot: gait phase in [0, 1), then the low-pass filtered command (vx, vy, yaw rate)."""
+WALKER_STATE_SIZE = 5
+"""Per robot: gait phase in [0, 1), the low-pass filtered command (vx, vy, yaw rate), getting up (1) or not (0)."""
+GETUP_START_UP_Z = 0.5
+"""A robot whose torso's up axis has a z component below this (tilted past 60 degrees) starts getting up."""
+GETUP_END_UP_Z = 0.9
+"""It walks again once that z component is above this (within about 25 degrees of upright) ..."""
+GETUP_END_POSE_RAD = 0.25
+"""... and its joints are within this mean absolute angle of the default pose, radians."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -49,6 +60,10 @@ class Walker:
     """The robot's default pose (residual walkers: the reference's targets become actions around it)."""
     action_scale: float = 1.0
     """Radians per unit of action (residual walkers)."""
+    getup: Opponent | None = None
+    """A frozen op3-getup actor (reads the proprioception) that plays while a robot gets up; None: none."""
+    getup_net: OpponentNet | None = None
+    """How the get-up actor's layers are joined."""
 
     def command(self, action: jax.Array) -> jax.Array:
         """The velocity command [..., 3] of commanding actions [..., 3] (clipped to [-1, 1])."""
@@ -62,12 +77,22 @@ class Walker:
         inputs = jnp.concatenate([proprio, self.command(action), jnp.sin(clock), jnp.cos(clock)], axis=-1)
         out = network_actions(self.net, self.policy, inputs)
         if self.residual:
-            targets = jax.vmap(lambda s: gait_targets(self.gait, s[0], s[1:]))(state)
+            targets = jax.vmap(lambda s: gait_targets(self.gait, s[0], s[1:4]))(state)
             out = out + actions_of(targets, jnp.asarray(self.default_pose), self.action_scale)
+        if self.getup is not None:
+            out = jnp.where(state[:, 4:5] > 0.5, network_actions(self.getup_net, self.getup, proprio), out)
         return out
 
-    def step(self, state: jax.Array, action: jax.Array) -> jax.Array:
-        """Walker states one control period on, the robots commanded by `action` [n, 3] meanwhile."""
+    def step(self, state: jax.Array, action: jax.Array, proprio: jax.Array) -> jax.Array:
+        """Walker states one control period on, the robots commanded by `action` [n, 3] meanwhile; with a
+        get-up policy, who gets up next is decided from their proprioception [n, 66] now."""
         phase = advance_phase(state[:, 0], self.dt, self.gait)
-        filtered = filter_command(state[:, 1:], self.command(action), self.dt, self.gait)
-        return jnp.concatenate([phase[:, None], filtered], axis=-1)
+        filtered = filter_command(state[:, 1:4], self.command(action), self.dt, self.gait)
+        getting_up = jnp.zeros_like(phase, dtype=bool)
+        if self.getup is not None:
+            up_z = -proprio[:, 2]  # the proprioception starts with gravity in the torso frame
+            stood = (up_z > GETUP_END_UP_Z) & (jnp.mean(jnp.abs(proprio[:, 6:26]), axis=-1) < GETUP_END_POSE_RAD)
+            getting_up = jnp.where(state[:, 4] > 0.5, ~stood, up_z < GETUP_START_UP_Z)
+            phase = jnp.where(getting_up, 0.0, phase)
+            filtered = jnp.where(getting_up[:, None], 0.0, filtered)
+        return jnp.concatenate([phase[:, None], filtered, getting_up[:, None].astype(phase.dtype)], axis=-1)
