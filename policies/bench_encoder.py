@@ -31,7 +31,7 @@ def _seconds(fn, repeats: int) -> float:
     return (time.perf_counter() - start) / repeats
 
 
-def bench_encoders(steps: list[int], batch: int = 6144, features: int = 42, latent: int = 32,
+def bench_encoders(steps: list[int], batch: int = 6144, features: int = 45, latent: int = 32,
                    hidden: tuple = (128, 128, 128), repeats: int = 4, seed: int = 0) -> list[dict]:
     """One record per history length: seconds per forward + backward pass of the encoder (unfold layout and
     conv1d layout) and of the head alone, and their ratios."""

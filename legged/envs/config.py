@@ -77,8 +77,7 @@ class EnvConfig:
     """Observation noise."""
     gyro_in_state: bool = False
     """`state` also holds the IMU's angular velocity (body frame; right after the projected gravity), as a real
-    robot measures it.
-    Off for the tasks whose shipped policies were trained without it; on for go1-rough."""
+    robot measures it. Off for the tasks whose shipped policies were trained without it; on for go1-rough."""
     history_steps: int = 0
     """When > 0, the observation `history` holds the last this many `state` vectors (oldest first, the current
     one last): what a deployable student remembers."""
