@@ -173,7 +173,8 @@ class TrainConfig:
     walker turns into joint actions (legged.soccer.walker). '' : the learner drives the joints itself."""
     getup: str = ""
     """Soccer tasks with a walker: run directory of an op3-getup policy that plays while a fallen robot gets up
-    (needs env.end_on_fall=never, so that a fall does not end the game). '' : none."""
+    (needs env.end_on_fall=never, so that a fall does not end the game, and env.scene.limb_floor_contacts=true,
+    as in its training). '' : none."""
 
     @property
     def self_play(self) -> bool:
@@ -224,9 +225,11 @@ class TrainConfig:
         if cfg.walker and (entry.kind != "soccer" or cfg.backend != "rsl"):
             raise ConfigError(f"walker (an op3-walk run the learner commands) is for soccer tasks with the rsl "
                               f"backend, not {cfg.task} with {cfg.backend}")
-        if cfg.getup and (not cfg.walker or getattr(cfg.env, "end_on_fall", None) != "never"):
-            raise ConfigError("getup (an op3-getup run that stands fallen players up) needs walker=OP3_WALK_RUN "
-                              "and env.end_on_fall=never (else a fall ends the game before anyone gets up)")
+        if cfg.getup and (not cfg.walker or getattr(cfg.env, "end_on_fall", None) != "never"
+                          or not cfg.env.scene.limb_floor_contacts):
+            raise ConfigError("getup (an op3-getup run that stands fallen players up) needs walker=OP3_WALK_RUN, "
+                              "env.end_on_fall=never (else a fall ends the game before anyone gets up) and "
+                              "env.scene.limb_floor_contacts=true (the skill pushes up with its arms and legs)")
         if cfg.num_envs * cfg.ppo.num_steps_per_env % cfg.ppo.num_mini_batches:
             raise ConfigError(f"num_envs x num_steps_per_env ({cfg.num_envs} x {cfg.ppo.num_steps_per_env}) must "
                               f"divide into num_mini_batches ({cfg.ppo.num_mini_batches})")

@@ -92,6 +92,14 @@ def test_robot_robot_pairs_are_optional():
     assert model.npair == build_soccer_scene(SoccerSceneConfig(players_per_team=2)).npair + 6 * 5
 
 
+def test_limb_floor_pairs_are_optional():
+    model = build_soccer_scene(SoccerSceneConfig(limb_floor_contacts=True))
+    names = {frozenset((model.geom(a).name, model.geom(b).name)) for a, b in zip(model.pair_geom1, model.pair_geom2)}
+    limbs = OP3.arm_geoms + OP3.thigh_geoms + OP3.calf_geoms
+    assert all({f"{prefix}{geom}", "floor"} in names for prefix in ("home0/", "away0/") for geom in limbs)
+    assert model.npair == build_soccer_scene(SoccerSceneConfig()).npair + 2 * len(limbs)
+
+
 def test_kickoff_positions_face_the_opponent_goal(scene):
     config, model, layout = scene
     data = _kickoff(model)

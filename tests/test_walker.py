@@ -166,5 +166,7 @@ def test_getup_needs_a_walker_and_games_that_go_on_after_a_fall():
         TrainConfig(task="soccer-1v1", getup="up").resolved()
     with pytest.raises(ConfigError, match="end_on_fall=never"):
         TrainConfig(task="soccer-1v1", getup="up", walker="walk").resolved()
-    assert apply_overrides(TrainConfig(task="soccer-1v1").resolved(),
-                           ["getup=up", "walker=walk", "env.end_on_fall=never"]).resolved().getup == "up"
+    with pytest.raises(ConfigError, match="limb_floor_contacts=true"):
+        apply_overrides(TrainConfig(task="soccer-1v1").resolved(), ["getup=up", "walker=walk", "env.end_on_fall=never"])
+    assert apply_overrides(TrainConfig(task="soccer-1v1").resolved(), [
+        "getup=up", "walker=walk", "env.end_on_fall=never", "env.scene.limb_floor_contacts=true"]).getup == "up"

@@ -55,6 +55,9 @@ class SoccerSceneConfig:
     """Robot collision geoms (unprefixed OP3 names) that touch the ball: what a robot kicks with."""
     robot_robot_contacts: bool = False
     """Add robot-robot pairs (torso-torso and foot-foot between every two robots); they cost MJX time."""
+    limb_floor_contacts: bool = False
+    """Also pair each robot's arm, thigh and shin capsules with the floor, so that a fallen robot can push
+    itself up (op3-getup, and games with a get-up skill); off elsewhere: 8 more pairs per robot cost time."""
     home_rgba: tuple[float, float, float, float] = (0.15, 0.35, 0.85, 1.0)
     """Team colour of the home team (torso and head shells), RGBA."""
     away_rgba: tuple[float, float, float, float] = (0.85, 0.2, 0.15, 1.0)

@@ -5,7 +5,8 @@ Every robot is a namespaced copy of assets/robots/op3.xml attached with `MjsFram
 tinted with its team colour and placed at its kick-off pose. Contacts are explicit `<pair>`s only
 (every geom keeps contype = conaffinity = 0) so MJX evaluates just these:
 
-- each robot's feet, torso and head with the floor (torso and head: fallen robots lie on the floor);
+- each robot's feet, torso and head with the floor (torso and head: fallen robots lie on the floor), and
+  with `limb_floor_contacts` its arms, thighs and shins too (what a robot getting up pushes with);
 - the ball with the floor (condim 6: rolling friction slows it like grass), with each robot's
   `ball_robot_geoms` (feet and shins: what kicks), with every goal box and with the four walls;
 - optionally (`robot_robot_contacts`) torso-torso and foot-foot between every two robots.
@@ -117,8 +118,9 @@ def _pair(spec, geom1, geom2, friction, condim=3):
 def _add_contacts(spec: mujoco.MjSpec, config: SoccerSceneConfig, prefixes) -> None:
     floor = (config.floor_friction, config.floor_friction, 0.005, 0.0001, 0.0001)
     ball = (config.ball_friction, config.ball_friction, 0.005, 0.0001, 0.0001)
+    limbs = OP3.arm_geoms + OP3.thigh_geoms + OP3.calf_geoms if config.limb_floor_contacts else ()
     for p in prefixes:
-        for geom in OP3.feet_geoms + OP3.body_geoms:
+        for geom in OP3.feet_geoms + OP3.body_geoms + limbs:
             _pair(spec, p + geom, FLOOR_GEOM, floor)
     roll = config.ball_rolling_friction
     _pair(spec, BALL, FLOOR_GEOM, (config.ball_friction, config.ball_friction, roll, roll, roll), condim=6)

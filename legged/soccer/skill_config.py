@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
+from legged.soccer.config import SoccerSceneConfig
 from legged.soccer.randomize import SoccerRandomization
 from legged.soccer.task_config import SoccerConfig
 
@@ -106,5 +107,7 @@ class GetUpConfig(SkillConfig):
 
     episode_seconds: float = 6.0
     """Length of an episode, seconds (falls do not end it)."""
+    scene: SoccerSceneConfig = SoccerSceneConfig(limb_floor_contacts=True)
+    """The pitch, with arms, thighs and shins touching the floor (what a robot getting up pushes with)."""
     getup_rewards: GetUpRewards = GetUpRewards()
     """Reward weights of the get-up skill."""
