@@ -237,8 +237,9 @@ def test_plot_overlays_runs_one_colour_each(trained_run, tmp_path, capsys):
     run_dir = trained_run[0]
     other = shutil.copytree(run_dir, tmp_path / "other")
     records = RunDir(other).metrics()
-    (other / "metrics.jsonl").write_text("".join(json.dumps(dict(r, episode_return=r["episode_return"] + 100.0)) + "\n"
-                                                 for r in records))  # a second run whose line lies elsewhere
+    shifted = lambda v: None if v is None else v + 100.0  # a second run whose line lies elsewhere
+    (other / "metrics.jsonl").write_text("".join(json.dumps(dict(r, episode_return=shifted(r["episode_return"])))
+                                                 + "\n" for r in records))
     out = tmp_path / "both.png"
     assert main(["plot", str(run_dir), str(other), "--y", "episode_return", "--out", str(out)]) == 0
     pixels = {colour for _, colour in Image.open(out).convert("RGB").getcolors(maxcolors=1 << 20)}
