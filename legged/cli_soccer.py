@@ -24,9 +24,9 @@ def add_soccer_commands(sub) -> None:
     dr = sub.add_parser("drill", help="measure one skill of a soccer player: walk (velocity commands), "
                                       "empty-goal (score from 1-2 m) or getup (stand up from lying)")
     dr.add_argument("drill", help="walk, empty-goal or getup")
-    dr.add_argument("--player", default="placo", metavar="placo|RUN",
-                    help="the placo player (default), a skill run (op3-walk: walk, op3-getup: getup) or a "
-                         "soccer-1v1 run directory (empty-goal)")
+    dr.add_argument("--player", default="placo", metavar="placo|script|RUN",
+                    help="the placo player (default), ROBOTIS' scripted get-up (script: getup), a skill run "
+                         "(op3-walk: walk, op3-getup: getup) or a soccer-1v1 run directory (empty-goal)")
     dr.add_argument("--episodes", type=bounded(int, 1, 100000), default=16)
     dr.add_argument("--seed", type=SEED, default=12345, help="seed of the drill episodes")
     dr.add_argument("--num-envs", type=bounded(int, 1, 4096), default=16, help="episodes run side by side")

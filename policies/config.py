@@ -172,9 +172,9 @@ class TrainConfig:
     """Soccer tasks: run directory of an op3-walk policy; the learner then commands velocities that this frozen
     walker turns into joint actions (legged.soccer.walker). '' : the learner drives the joints itself."""
     getup: str = ""
-    """Soccer tasks with a walker: run directory of an op3-getup policy that plays while a fallen robot gets up
-    (needs env.end_on_fall=never, so that a fall does not end the game, and env.scene.limb_floor_contacts=true,
-    as in its training). '' : none."""
+    """Soccer tasks with a walker: how a fallen robot gets up, `script` (ROBOTIS' scripted get-up) or the run
+    directory of an op3-getup policy (needs env.end_on_fall=never, so that a fall does not end the game, and
+    env.scene.limb_floor_contacts=true, as in its training). '' : fallen robots stay down."""
 
     @property
     def self_play(self) -> bool:
@@ -227,7 +227,7 @@ class TrainConfig:
                               f"backend, not {cfg.task} with {cfg.backend}")
         if cfg.getup and (not cfg.walker or getattr(cfg.env, "end_on_fall", None) != "never"
                           or not cfg.env.scene.limb_floor_contacts):
-            raise ConfigError("getup (an op3-getup run that stands fallen players up) needs walker=OP3_WALK_RUN, "
+            raise ConfigError("getup (script or an op3-getup run that stands fallen players up) needs walker=OP3_WALK_RUN, "
                               "env.end_on_fall=never (else a fall ends the game before anyone gets up) and "
                               "env.scene.limb_floor_contacts=true (the skill pushes up with its arms and legs)")
         if cfg.num_envs * cfg.ppo.num_steps_per_env % cfg.ppo.num_mini_batches:

@@ -1,4 +1,4 @@
-"""`legged drill walk|empty-goal --player placo|RUN`: a soccer player's skills measured one at a time
+"""`legged drill walk|empty-goal|getup --player placo|script|RUN`: a soccer player's skills measured one at a time
 (legged.soccer.drills), in MJX or native MuJoCo, with or without the game's domain randomisation."""
 
 from __future__ import annotations
@@ -14,6 +14,8 @@ from policies.evaluate import evaluate
 
 SKILL_DRILLS = {"op3-walk": "walk", "op3-getup": "getup"}
 """Skill tasks (legged.soccer.skills) and the drill each plays, in its own observations."""
+SCRIPT = "script"
+"""`--player script`: ROBOTIS' scripted get-up (legged.soccer.getup_motion) played open loop, getup drill only."""
 
 
 @dataclasses.dataclass
@@ -33,6 +35,10 @@ class BuiltInPlayer:
 def check_player(spec: str, drill: DrillConfig) -> None:
     """ValueError (or RunDirError) naming why `--player spec` cannot do `drill`, before anything is built."""
     if spec == "placo":
+        return
+    if spec == SCRIPT:
+        if drill.name != "getup":
+            raise ValueError(f"--player script plays ROBOTIS' scripted get-up: the getup drill only, not {drill.name}")
         return
     from legged.tasks import task_entry
     from policies.run_dir import RunDir
@@ -54,7 +60,7 @@ def check_player(spec: str, drill: DrillConfig) -> None:
 
 def drill_player(spec: str, env: DrillEnv):
     """The player `--player` names (checked by `check_player`): `placo`, or a run whose policy plays agent 0."""
-    if spec == "placo":
+    if spec in ("placo", SCRIPT):
         return BuiltInPlayer(env.action_size)
     from policies.policy_io import load_policy
     from policies.run_dir import check_compatible
@@ -70,14 +76,17 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
     from legged.soccer import skills
     from policies.run_dir import RunDir
 
-    run = None if player == "placo" else RunDir(player).load_config()
+    run = None if player in ("placo", SCRIPT) else RunDir(player).load_config()
     with_randomization = lambda config: dataclasses.replace(
         config, randomization=dataclasses.replace(config.randomization, enabled=randomize))
     if run is not None and run.task == "op3-walk":
         return skills.WalkSkillEnv(with_randomization(WalkSkillConfig(
-            command_seconds=drill.command_seconds, command_low=drill.command_low, command_high=drill.command_high)))
-    if run is not None and run.task == "op3-getup":
-        return skills.GetUpSkillEnv(with_randomization(GetUpConfig(episode_seconds=drill.getup_seconds)))
+            command_seconds=drill.command_seconds, command_low=drill.command_low, command_high=drill.command_high,
+            residual=run.env.residual)))
+    if player == SCRIPT or (run is not None and run.task == "op3-getup"):  # the script: the reference, no policy
+        residual = True if run is None else run.env.residual
+        return skills.GetUpSkillEnv(with_randomization(GetUpConfig(episode_seconds=drill.getup_seconds,
+                                                                   residual=residual)))
     walker = None
     if run is not None and run.walker:  # a soccer player that commands a walking skill
         from policies.policy_io import load_walker

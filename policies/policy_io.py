@@ -13,6 +13,9 @@ import torch
 from policies.config import TrainConfig
 from policies.run_dir import RunDir, RunDirError
 
+GETUP_SCRIPT = "script"
+"""`getup=script`: soccer players get up by ROBOTIS' scripted get-up alone (legged.soccer.getup_motion)."""
+
 
 @dataclasses.dataclass
 class Policy:
@@ -132,11 +135,12 @@ def load_policy(run_dir: str | Path, checkpoint: str | Path | None = None) -> tu
     return loader(config, path), config
 
 
-def load_walker(run_dir: str | Path, getup_run: str | Path = ""):
+def load_walker(run_dir: str | Path, getup: str | Path = ""):
     """The frozen walking skill of an op3-walk run (`legged.soccer.walker.Walker`), for soccer players that
-    command velocities, with the get-up skill of an op3-getup run when one is named; ValueError naming what is
-    wrong when a run is not what it should be."""
+    command velocities, with a get-up skill when `getup` names one: `script` (ROBOTIS' scripted get-up alone)
+    or an op3-getup run; ValueError naming what is wrong when a run is not what it should be."""
     from legged.soccer.gait_table import load_gait_table
+    from legged.soccer.getup_motion import getup_motion
     from legged.soccer.opponents import OpponentNet
     from legged.soccer.walker import Walker
     from policies.selfplay import snapshot_rsl_actor
@@ -145,20 +149,23 @@ def load_walker(run_dir: str | Path, getup_run: str | Path = ""):
     if config.task != "op3-walk" or config.backend != "rsl" or config.algo != "ppo":
         raise ValueError(f"walker {run_dir}: a walker is an op3-walk run trained with rsl/ppo; this run trained "
                          f"{config.task} with {config.backend}/{config.algo}")
-    getup = getup_net = None
-    if getup_run:  # both runs checked before either is loaded
-        getup_config = RunDir(getup_run).load_config()
+    learned = bool(getup) and str(getup) != GETUP_SCRIPT
+    if learned:  # both runs checked before either is loaded
+        getup_config = RunDir(getup).load_config()
         if getup_config.task != "op3-getup" or getup_config.backend != "rsl" or getup_config.algo != "ppo":
-            raise ValueError(f"getup {getup_run}: a get-up skill is an op3-getup run trained with rsl/ppo; this run "
-                             f"trained {getup_config.task} with {getup_config.backend}/{getup_config.algo}")
+            raise ValueError(f"getup {getup}: a get-up skill is `{GETUP_SCRIPT}` or an op3-getup run trained with "
+                             f"rsl/ppo; this run trained {getup_config.task} with {getup_config.backend}/"
+                             f"{getup_config.algo}")
     policy, _ = load_policy(run_dir)
     from legged.robots.op3 import OP3
 
-    if getup_run:
-        getup = snapshot_rsl_actor(load_policy(getup_run)[0].torch_module)
-        getup_net = OpponentNet(getup_config.ppo.activation)
-    return Walker(policy=snapshot_rsl_actor(policy.torch_module), net=OpponentNet(config.ppo.activation),
-                  getup=getup, getup_net=getup_net,
+    skill = {}
+    if getup:
+        skill["getup_motion"] = getup_motion()
+    if learned:
+        skill.update(getup=snapshot_rsl_actor(load_policy(getup)[0].torch_module),
+                     getup_net=OpponentNet(getup_config.ppo.activation), getup_residual=bool(getup_config.env.residual))
+    return Walker(policy=snapshot_rsl_actor(policy.torch_module), net=OpponentNet(config.ppo.activation), **skill,
                   command_low=tuple(config.env.command_low), command_high=tuple(config.env.command_high),
                   gait=load_gait_table(), dt=float(config.env.ctrl_dt), residual=bool(config.env.residual),
                   default_pose=tuple(float(q) for q in OP3.default_pose), action_scale=float(OP3.action_scale))

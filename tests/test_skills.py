@@ -56,17 +56,40 @@ def test_playing_the_reference_earns_the_imitation_reward(env):
 
 
 def test_getup_starts_lying_and_rewards_rising():
-    getup = make("op3-getup")
-    assert getup.observation_dims() == {"state": 66, "privileged_state": 71}
+    getup = make("op3-getup", residual=False)  # zero actions hold the default pose (no script)
+    assert getup.observation_dims() == {"state": 68, "privileged_state": 93}
     lying = _rollout(getup, "zero", steps=40)
     assert lying["standing"] == 0.0 and lying["stood"] == 0.0
     assert lying["reward/standing"] == 0.0 and lying["reward/height"] < 0.2   # lying low: little height reward
-    # the first observation already lies flat: torso height and up axis in privileged_state's last two entries
+    # the first observation already lies flat: torso height and up axis before the reference's 20 targets
     from legged.envs.vector import VectorEnv
 
     batch = VectorEnv.of(getup, 4, "native", 1).reset(jax.random.PRNGKey(1))
     privileged = np.asarray(batch.state.obs["privileged_state"])
-    assert np.all(privileged[:, -2] < 0.12) and np.all(np.abs(privileged[:, -1]) < 0.3)
+    assert np.all(privileged[:, -22] < 0.12) and np.all(np.abs(privileged[:, -21]) < 0.3)
+
+
+def test_getup_motions_are_robotis_key_poses_between_default_poses():
+    """The scripted get-ups start and end in the default pose, pass through ROBOTIS' key poses mirrored
+    left to right, and the one that plays is the front one only for a robot lying face down."""
+    from legged.robots.op3 import OP3
+    from legged.soccer.getup_motion import getup_motion, lies_on_back, motion_features, motion_targets
+
+    motion, default = getup_motion(), np.asarray(OP3.default_pose)
+    index = {name: i for i, name in enumerate(OP3.joint_names)}
+    for back in (0.0, 1.0):
+        at = lambda t: np.asarray(motion_targets(motion, jnp.float32(back), jnp.float32(t)))  # noqa: E731
+        np.testing.assert_allclose(at(0.0), default, atol=1e-6)
+        np.testing.assert_allclose(at(float(motion.length[int(back)])), default, atol=1e-6)
+        second = float(motion.starts[int(back), 1] + motion.moves[int(back), 1])   # the second key pose reached
+        np.testing.assert_allclose(at(second), np.asarray(motion.poses[int(back), 2]), atol=1e-5)
+        for joint in ("sho_pitch", "el", "hip_pitch", "knee", "ank_pitch"):
+            assert at(second)[index[f"l_{joint}"]] == pytest.approx(-at(second)[index[f"r_{joint}"]], abs=1e-6)
+        assert np.asarray(motion_features(motion, jnp.float32(back), jnp.float32(99.0))).tolist() == [back, 1.0]
+    front_knee = np.asarray(motion.poses[0, 3])[index["l_knee"]]
+    assert front_knee == pytest.approx(2.457, abs=1e-3)  # ROBOTIS' deepest crouch, inside the widened range
+    gravity = jnp.asarray([[0.9, 0.0, -0.1], [-0.9, 0.0, -0.1], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]])
+    assert np.asarray(lies_on_back(gravity)).tolist() == [0.0, 1.0, 1.0, 1.0]  # face down, back, side, upright
 
 
 def test_bad_walk_configs_and_drills_fail_in_one_line(tmp_path, capsys):
@@ -95,4 +118,18 @@ def test_getup_drill_reports_success_and_time(capsys):
     assert main(["drill", "getup", "--player", "placo", "--episodes", "2", "--threads", "1", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["drill"] == "getup" and report["episode_seconds"] == pytest.approx(5.0)
-    assert report["success_rate"] == 0.0 and report["time_to_stand_s"] is None  # the script cannot get up
+    assert report["success_rate"] == 0.0 and report["time_to_stand_s"] is None  # the placo player cannot get up
+
+
+def test_robotis_scripted_getup_stands_within_the_drill(capsys):
+    """ROBOTIS' get-ups, played open loop in this model (its widened joint ranges, limbs touching the floor),
+    stand the robot up from lying starts within the drill's 5 s, with the game's randomisation on."""
+    import json
+
+    assert main(["drill", "getup", "--player", "script", "--episodes", "4", "--num-envs", "4", "--threads", "1",
+                 "--randomize", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["success_rate"] == 1.0 and 2.0 < report["time_to_stand_s"] < 5.0
+    assert main(["drill", "walk", "--player", "script"]) == 2
+    err = capsys.readouterr().err
+    assert "the getup drill only" in err and err.count("\n") == 1, err

@@ -36,7 +36,7 @@ def _walk_state(env, steps: int):
     for _ in range(steps):
         batch, _ = vector.step(batch, jnp.zeros((2, env.action_size)))
     info = batch.state.info
-    return batch, jnp.concatenate([info["gait_phase"][:, None], info["gait_command"], jnp.zeros((2, 1))], axis=1)
+    return batch, jnp.concatenate([info["gait_phase"][:, None], info["gait_command"], jnp.zeros((2, 3))], axis=1)
 
 
 def _action_of(command):
@@ -72,7 +72,7 @@ def test_a_residual_walker_adds_the_reference_and_keeps_the_skills_clock():
     np.testing.assert_allclose(np.asarray(walked), np.asarray(played), atol=1e-5)
     assert float(jnp.abs(played).max()) > 0.1  # the reference moves the legs
     advanced = jax.vmap(env._advance)(info)
-    expected = jnp.concatenate([advanced["gait_phase"][:, None], advanced["gait_command"], jnp.zeros((2, 1))], axis=1)
+    expected = jnp.concatenate([advanced["gait_phase"][:, None], advanced["gait_command"], jnp.zeros((2, 3))], axis=1)
     proprio = batch.state.obs["state"][:, :PROPRIO_SIZE]
     np.testing.assert_allclose(np.asarray(zero.step(walker_state, action, proprio)), np.asarray(expected), atol=1e-5)
 
@@ -117,7 +117,7 @@ def test_a_walker_must_be_an_op3_walk_run(tmp_path):
         load_walker(other.path)
     walk = RunDir(tmp_path / "walk")
     walk.create(TrainConfig(task="op3-walk").resolved())
-    with pytest.raises(ValueError, match="a get-up skill is an op3-getup run"):
+    with pytest.raises(ValueError, match="a get-up skill is `script` or an op3-getup run"):
         load_walker(walk.path, other.path)
 
 
@@ -137,22 +137,46 @@ def test_in_2v2_the_teammate_and_the_other_team_play_from_their_own_opponents():
 
 
 def test_a_fallen_robot_gets_up_through_the_getup_skill_then_walks_again():
-    """With a get-up policy the walker hands a robot tilted past 60 degrees to it, ignores its command and
-    restarts its clock, and gives it back once it stands upright near its default pose."""
+    """With a get-up skill the walker hands a robot tilted past 60 degrees to it (the back or front script,
+    chosen from gravity, its clock running, the policy's corrections added), ignores its command and restarts
+    its gait clock, gives it back once it stands upright near its default pose, and restarts a script that
+    ended without standing."""
+    from legged.soccer.getup_motion import getup_motion, motion_targets
+    from legged.soccer.placo_player import actions_of
+    from legged.soccer.walker import GETUP_RETRY_S
+
     walker = _walker([(np.zeros((PROPRIO_SIZE + 5, 20), np.float32), np.zeros(20, np.float32))])
-    getup = network_opponent(np.zeros(PROPRIO_SIZE), np.ones(PROPRIO_SIZE),
-                             [(np.zeros((PROPRIO_SIZE, 20), np.float32), np.full(20, 0.7, np.float32))])
-    walker = dataclasses.replace(walker, getup=getup, getup_net=OpponentNet("elu"))
-    proprio = lambda up_z, pose: jnp.asarray([[0.0, -np.sqrt(1 - up_z ** 2), -up_z, 0, 0, 0] + [pose] * 20 +
-                                              [0.0] * 40], jnp.float32)
+    n = PROPRIO_SIZE + 2  # the get-up policy reads the script's two features after the proprioception
+    getup = network_opponent(np.zeros(n), np.ones(n), [(np.zeros((n, 20), np.float32), np.full(20, 0.7, np.float32))])
+    motion = getup_motion()
+    walker = dataclasses.replace(walker, getup_motion=motion, getup=getup, getup_net=OpponentNet("elu"))
+
+    def proprio(up_z, pose, face_down=False):  # gravity in the torso frame: tipped sideways, or face down
+        tipped = [np.sqrt(1 - up_z ** 2), 0.0] if face_down else [0.0, -np.sqrt(1 - up_z ** 2)]
+        return jnp.asarray([tipped + [-up_z, 0, 0, 0] + [pose] * 20 + [0.0] * 40], jnp.float32)
+
     command = jnp.ones((1, 3))
-    walking = jnp.asarray([[0.3, 0.1, 0.0, 0.2, 0.0]])
+    walking = jnp.asarray([[0.3, 0.1, 0.0, 0.2, 0.0, 0.0, 0.0]])
     assert float(jnp.abs(walker.actions(proprio(1.0, 0.0), command, walking)).max()) == 0.0  # the walk net
     stays = walker.step(walking, command, proprio(0.8, 0.0))
     assert float(stays[0, 4]) == 0.0 and float(stays[0, 0]) > 0.3  # 37 degrees of tilt: still walking
     fallen = walker.step(walking, command, proprio(0.2, 0.0))
-    np.testing.assert_allclose(np.asarray(fallen), [[0.0, 0.0, 0.0, 0.0, 1.0]])  # getting up, clock restarted
-    np.testing.assert_allclose(np.asarray(walker.actions(proprio(0.2, 0.0), command, fallen)), 0.7, atol=1e-6)
+    np.testing.assert_allclose(np.asarray(fallen), [[0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0]])  # on its side: the back script
+    face_down = walker.step(walking, command, proprio(0.2, 0.0, face_down=True))
+    assert float(face_down[0, 4]) == 1.0 and float(face_down[0, 6]) == 0.0                  # the front script
+    later = walker.step(fallen, command, proprio(0.3, 0.0, face_down=True))
+    np.testing.assert_allclose(np.asarray(later[0, 4:]), [1.0, walker.dt, 1.0], atol=1e-6)  # same script, clock on
+    midway = later.at[0, 5].set(2.0)
+    script = actions_of(motion_targets(motion, jnp.float32(1.0), jnp.float32(2.0)), jnp.asarray(walker.default_pose),
+                        walker.action_scale)
+    assert float(jnp.abs(script).max()) > 1.0  # two seconds in, the back script is far from the default pose
+    np.testing.assert_allclose(np.asarray(walker.actions(proprio(0.3, 0.0), command, midway))[0], 0.7 + script,
+                               atol=1e-5)
+    alone = dataclasses.replace(walker, getup=None, getup_net=None)  # `getup=script`: the script alone
+    np.testing.assert_allclose(np.asarray(alone.actions(proprio(0.3, 0.0), command, midway))[0], script, atol=1e-5)
+    ended = later.at[0, 5].set(float(motion.length[1]) + GETUP_RETRY_S)
+    again = walker.step(ended, command, proprio(0.2, 0.0, face_down=True))
+    np.testing.assert_allclose(np.asarray(again[0, 4:]), [1.0, 0.0, 0.0])  # still down: the (front) script restarts
     crouched = walker.step(fallen, command, proprio(0.95, 0.5))  # upright but far from the standing pose
     assert float(crouched[0, 4]) == 1.0
     stood = walker.step(fallen, command, proprio(0.95, 0.1))

@@ -111,3 +111,6 @@ class GetUpConfig(SkillConfig):
     """The pitch, with arms, thighs and shins touching the floor (what a robot getting up pushes with)."""
     getup_rewards: GetUpRewards = GetUpRewards()
     """Reward weights of the get-up skill."""
+    residual: bool = True
+    """The policy's action is added to the reference's (ROBOTIS' scripted get-up from the front or the back,
+    legged.soccer.getup_motion): it starts out playing the script and learns the corrections."""

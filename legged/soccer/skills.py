@@ -6,7 +6,9 @@
   filtered as the scripted player filters it (legged.soccer.gait_table). With `residual` (the default) its
   actions are corrections added to the reference's.
 - `op3-getup` (GetUpSkillEnv): the getup drill made a training task. The robot starts lying and is
-  rewarded for raising its torso, turning upright, and standing in the default pose.
+  rewarded for raising its torso, turning upright, and standing in the default pose. Its reference is
+  ROBOTIS' scripted get-up from the front or the back (legged.soccer.getup_motion); with `residual` (the
+  default) its actions are corrections added to the script's.
 
 Both are drills (legged.soccer.drills: one OP3 on the soccer pitch, the other parked off it), so physics,
 randomisation and falls are the soccer game's own and a trained skill plays its drill unchanged (`legged
@@ -22,10 +24,11 @@ import jax.numpy as jnp
 import numpy as np
 from brax.envs.base import State
 
-from legged.envs.math import yaw_rotate
+from legged.envs.math import quat_to_mat, yaw_rotate
 from legged.envs.physics import PhysicsView, Spawn
 from legged.soccer.drills import DrillConfig, DrillEnv
 from legged.soccer.gait_table import advance_phase, filter_command, gait_targets
+from legged.soccer.getup_motion import getup_motion, lies_on_back, motion_features, motion_targets
 from legged.soccer.learner import LEARNER
 from legged.soccer.observe import PROPRIO_SIZE, Bodies, read_bodies
 from legged.soccer.placo_player import actions_of
@@ -149,12 +152,44 @@ class WalkSkillEnv(SkillEnv):
 class GetUpSkillEnv(SkillEnv):
     """op3-getup: one OP3 starting on its front, back or side, learning to stand up and stay up.
 
-    Observations: `state` = noisy proprioception (66); `privileged_state` = the same clean, torso velocity in
-    the torso frame (3), height and uprightness."""
+    Observations: `state` = noisy proprioception (66), which scripted get-up plays and how far it is (2,
+    legged.soccer.getup_motion); `privileged_state` = the same clean, torso velocity in the torso frame (3),
+    height, uprightness and the reference's 20 servo targets."""
 
     def __init__(self, config: GetUpConfig = GetUpConfig()):
         super().__init__(DrillConfig(name="getup", getup_seconds=config.episode_seconds), config)
         self._default = jnp.asarray(self.robot.default_pose, jnp.float32)
+        self.motion = getup_motion()
+
+    def spawn(self, rng, carry: dict | None = None) -> Spawn:
+        spawn = super().spawn(rng, carry)
+        adr = int(self.game.layout.root_qpos_adr[LEARNER])
+        gravity = -quat_to_mat(spawn.qpos[adr + 3:adr + 7])[2, :]  # as the proprioception reads it
+        return dataclasses.replace(spawn, info=dict(spawn.info, getup_back=lies_on_back(gravity)))
+
+    def reference(self, info: dict) -> jnp.ndarray:
+        """The scripted get-up's servo targets (20,) at the episode's time."""
+        return motion_targets(self.motion, info["getup_back"], info["getup_time"])
+
+    def learner_actions(self, state: State, action: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
+        """The robot's joint actions: the policy's, plus the reference's when the skill is `residual`."""
+        joints, walker_state = super().learner_actions(state, action)
+        if self.config.residual:
+            joints = joints + actions_of(self.reference(state.info), self._default, self.robot.action_scale)
+        return joints, walker_state
+
+    def _skill_info(self) -> dict:
+        return dict(getup_time=jnp.float32(0.0), getup_back=jnp.float32(1.0))
+
+    def _advance(self, info: dict) -> dict:
+        return dict(info, getup_time=info["getup_time"] + self.dt)
+
+    def _features(self, info: dict, b: Bodies) -> tuple[jnp.ndarray, jnp.ndarray]:
+        return motion_features(self.motion, info["getup_back"], info["getup_time"]), self.reference(info)
+
+    def _metrics(self, info: dict, b: Bodies) -> dict:
+        return {"reference_rms_rad": jnp.sqrt(jnp.mean(jnp.square(b.q[LEARNER] - self.reference(info)))),
+                "back_getup": info["getup_back"]}
 
     def _rewards(self, info: dict, b: Bodies, metrics: dict) -> dict:
         w, d = self.config.getup_rewards, self.drill

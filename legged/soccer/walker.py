@@ -9,10 +9,13 @@ an `Opponent`, the walker is arrays (no Python objects in the step); each robot 
 row of `WALKER_STATE_SIZE` floats (gait phase, low-pass filtered command, getting-up flag), in the game's
 `info['walker_state']`.
 
-With a frozen `op3-getup` policy as well (`Walker.getup`), a fall need not end the game: a robot tilted past
-`GETUP_START_UP_Z` hands its joints to the get-up policy until it stands upright near its default pose again
+With a get-up skill as well (`Walker.getup_motion`), a fall need not end the game: a robot tilted past
+`GETUP_START_UP_Z` hands its joints to the get-up skill until it stands upright near its default pose again
 (`GETUP_END_UP_Z`, `GETUP_END_POSE_RAD`, read from its own proprioception, as on a real robot); meanwhile its
-commands are ignored and its gait clock and filtered command restart from zero.
+commands are ignored and its gait clock and filtered command restart from zero. The get-up skill is ROBOTIS'
+scripted get-up from the front or the back (legged.soccer.getup_motion, chosen when the fall is seen), with
+a frozen `op3-getup` policy's corrections added (`Walker.getup`), or the script alone; one that has not
+stood `GETUP_RETRY_S` after its script ended starts it again.
 """
 
 from __future__ import annotations
@@ -23,19 +26,23 @@ import jax
 import jax.numpy as jnp
 
 from legged.soccer.gait_table import GaitTable, advance_phase, filter_command, gait_targets
+from legged.soccer.getup_motion import GetUpMotion, lies_on_back, motion_features, motion_targets
 from legged.soccer.opponents import Opponent, OpponentNet, network_actions
 from legged.soccer.placo_player import actions_of
 
 COMMAND_SIZE = 3
 """A commanding player's action: (vx, vy, yaw rate), each in [-1, 1] of the walker's command range."""
-WALKER_STATE_SIZE = 5
-"""Per robot: gait phase in [0, 1), the low-pass filtered command (vx, vy, yaw rate), getting up (1) or not (0)."""
+WALKER_STATE_SIZE = 7
+"""Per robot: gait phase in [0, 1), the low-pass filtered command (vx, vy, yaw rate), getting up (1) or not (0),
+seconds since the get-up started, and which get-up plays (1 back, 0 front)."""
 GETUP_START_UP_Z = 0.5
 """A robot whose torso's up axis has a z component below this (tilted past 60 degrees) starts getting up."""
 GETUP_END_UP_Z = 0.9
 """It walks again once that z component is above this (within about 25 degrees of upright) ..."""
 GETUP_END_POSE_RAD = 0.25
 """... and its joints are within this mean absolute angle of the default pose, radians."""
+GETUP_RETRY_S = 1.0
+"""Seconds after the get-up's script ended without standing before it starts again."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -60,10 +67,14 @@ class Walker:
     """The robot's default pose (residual walkers: the reference's targets become actions around it)."""
     action_scale: float = 1.0
     """Radians per unit of action (residual walkers)."""
+    getup_motion: GetUpMotion | None = None
+    """The scripted get-ups (legged.soccer.getup_motion) of robots that get up; None: fallen robots stay down."""
     getup: Opponent | None = None
-    """A frozen op3-getup actor (reads the proprioception) that plays while a robot gets up; None: none."""
+    """A frozen op3-getup actor (reads the proprioception and the script's features); None: the script alone."""
     getup_net: OpponentNet | None = None
     """How the get-up actor's layers are joined."""
+    getup_residual: bool = True
+    """The get-up actor's actions are corrections added to the script's (op3-getup's `residual`)."""
 
     def command(self, action: jax.Array) -> jax.Array:
         """The velocity command [..., 3] of commanding actions [..., 3] (clipped to [-1, 1])."""
@@ -79,20 +90,39 @@ class Walker:
         if self.residual:
             targets = jax.vmap(lambda s: gait_targets(self.gait, s[0], s[1:4]))(state)
             out = out + actions_of(targets, jnp.asarray(self.default_pose), self.action_scale)
+        if self.getup_motion is not None:
+            out = jnp.where(state[:, 4:5] > 0.5, self._getup_actions(proprio, state[:, 6], state[:, 5]), out)
+        return out
+
+    def _getup_actions(self, proprio: jax.Array, back: jax.Array, t: jax.Array) -> jax.Array:
+        """Joint actions [n, 20] of the get-up skill, `t` seconds into the back (1) or front (0) get-up."""
+        motion = self.getup_motion
+        out = jnp.zeros((proprio.shape[0], len(self.default_pose)), proprio.dtype)
         if self.getup is not None:
-            out = jnp.where(state[:, 4:5] > 0.5, network_actions(self.getup_net, self.getup, proprio), out)
+            features = jax.vmap(lambda b, s: motion_features(motion, b, s))(back, t)
+            out = network_actions(self.getup_net, self.getup, jnp.concatenate([proprio, features], axis=-1))
+        if self.getup is None or self.getup_residual:
+            targets = jax.vmap(lambda b, s: motion_targets(motion, b, s))(back, t)
+            out = out + actions_of(targets, jnp.asarray(self.default_pose), self.action_scale)
         return out
 
     def step(self, state: jax.Array, action: jax.Array, proprio: jax.Array) -> jax.Array:
         """Walker states one control period on, the robots commanded by `action` [n, 3] meanwhile; with a
-        get-up policy, who gets up next is decided from their proprioception [n, 66] now."""
+        get-up skill, who gets up next is decided from their proprioception [n, 66] now."""
         phase = advance_phase(state[:, 0], self.dt, self.gait)
         filtered = filter_command(state[:, 1:4], self.command(action), self.dt, self.gait)
         getting_up = jnp.zeros_like(phase, dtype=bool)
-        if self.getup is not None:
+        t, back = jnp.zeros_like(phase), jnp.zeros_like(phase)
+        if self.getup_motion is not None:
             up_z = -proprio[:, 2]  # the proprioception starts with gravity in the torso frame
             stood = (up_z > GETUP_END_UP_Z) & (jnp.mean(jnp.abs(proprio[:, 6:26]), axis=-1) < GETUP_END_POSE_RAD)
-            getting_up = jnp.where(state[:, 4] > 0.5, ~stood, up_z < GETUP_START_UP_Z)
+            was = state[:, 4] > 0.5
+            getting_up = jnp.where(was, ~stood, up_z < GETUP_START_UP_Z)
+            retry = was & (state[:, 5] >= self.getup_motion.length[state[:, 6].astype(jnp.int32)] + GETUP_RETRY_S)
+            again = getting_up & (~was | retry)                    # a script (re)starts: choose it, clock at 0
+            back = jnp.where(again, lies_on_back(proprio[:, :3]), state[:, 6])
+            t = jnp.where(getting_up & ~again, state[:, 5] + self.dt, 0.0)
             phase = jnp.where(getting_up, 0.0, phase)
             filtered = jnp.where(getting_up[:, None], 0.0, filtered)
-        return jnp.concatenate([phase[:, None], filtered, getting_up[:, None].astype(phase.dtype)], axis=-1)
+        return jnp.concatenate([phase[:, None], filtered, getting_up[:, None].astype(phase.dtype), t[:, None],
+                                back[:, None]], axis=-1)
