@@ -108,8 +108,8 @@ def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "
               "randomized": randomize, "fall_rate": float(fell.mean()),
               "episode_seconds": float(np.mean([f["time_s"] for f in finals]))}
     if name == "walk":
-        report.update(speed_mps=float(np.mean([f["speed_mps"] for f in finals])),
-                      tracking_error_mps=float(np.mean([f["tracking_error_mps"] for f in finals])))
+        report.update({k: float(np.mean([f[k] for f in finals]))
+                       for k in ("speed_mps", "tracking_error_mps", "smoothed_tracking_error_mps")})
     elif name == "getup":
         stood = np.array([f["stood"] > 0 for f in finals])
         report.update(success_rate=float(stood.mean()),

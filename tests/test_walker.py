@@ -65,7 +65,7 @@ def test_a_residual_walker_adds_the_reference_and_keeps_the_skills_clock():
     assert env.config.residual
     batch, walker_state = _walk_state(env, 30)
     info = batch.state.info
-    zero = _walker([(np.zeros((PROPRIO_SIZE + 5, 20), np.float32), np.zeros(20, np.float32))], residual=True)
+    zero = _walker([(np.zeros((PROPRIO_SIZE + 8, 20), np.float32), np.zeros(20, np.float32))], residual=True)
     action = jnp.asarray(_action_of(np.asarray(jax.vmap(env.command)(info))))
     played = jax.vmap(lambda s: env.learner_actions(s, jnp.zeros(20))[0])(batch.state)
     walked = zero.actions(batch.state.obs["state"][:, :PROPRIO_SIZE], action, walker_state)
@@ -80,7 +80,7 @@ def test_a_residual_walker_adds_the_reference_and_keeps_the_skills_clock():
 def test_a_commanding_learner_and_its_opponents_walk_through_the_walker():
     """A linear walker that copies the forward command into the first joint: the learner's 3 actions reach its
     joints through it, a network opponent's too, and every robot's gait clock runs."""
-    size = PROPRIO_SIZE + 5
+    size = PROPRIO_SIZE + 8
     w = np.zeros((size, 20), np.float32)
     w[PROPRIO_SIZE, 0] = 1.0                                   # joint 0 <- commanded vx
     walker = _walker([(w, np.zeros(20, np.float32))])
@@ -145,7 +145,7 @@ def test_a_fallen_robot_gets_up_through_the_getup_skill_then_walks_again():
     from legged.soccer.placo_player import actions_of
     from legged.soccer.walker import GETUP_RETRY_S
 
-    walker = _walker([(np.zeros((PROPRIO_SIZE + 5, 20), np.float32), np.zeros(20, np.float32))])
+    walker = _walker([(np.zeros((PROPRIO_SIZE + 8, 20), np.float32), np.zeros(20, np.float32))])
     n = PROPRIO_SIZE + 2  # the get-up policy reads the script's two features after the proprioception
     getup = network_opponent(np.zeros(n), np.ones(n), [(np.zeros((n, 20), np.float32), np.full(20, 0.7, np.float32))])
     motion = getup_motion()

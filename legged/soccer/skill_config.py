@@ -37,11 +37,14 @@ class WalkRewards:
     """Reward weights and kernel widths of the walking skill (per control step)."""
 
     tracking_lin_vel: float = 1.0
-    """Times exp(-|v_cmd - v_xy|^2 / lin_vel_sigma^2), planar torso velocity in the heading frame."""
+    """Times exp(-|v_cmd - v_xy|^2 / lin_vel_sigma^2), planar torso velocity in the heading frame low-pass
+    filtered over the drill's `velocity_filter_s` (the instantaneous one sways within each step: tracking it
+    would pay standing still more than walking)."""
     tracking_yaw_rate: float = 0.5
-    """Times exp(-(w_cmd - w_z)^2 / yaw_rate_sigma^2), w_z the torso's yaw rate."""
-    imitation: float = 1.0
-    """Times exp(-mean over leg joints of (q - q_ref)^2 / imitation_sigma^2), q_ref the placo gait's targets."""
+    """Times exp(-(w_cmd - w_z)^2 / yaw_rate_sigma^2), w_z the torso's yaw rate, filtered the same way."""
+    imitation: float = 0.5
+    """Times exp(-mean over leg joints of (q - q_ref)^2 / imitation_sigma^2), q_ref the placo gait's targets
+    (half the tracking weight: placo's plan falls short of combined commands, which tracking must fix)."""
     upright: float = 0.3
     """Times the z component of the torso's up axis (1 upright): staying up is worth more than any penalty."""
     fall: float = -2.0

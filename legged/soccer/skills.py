@@ -24,7 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from brax.envs.base import State
 
-from legged.envs.math import quat_to_mat, yaw_rotate
+from legged.envs.math import quat_to_mat
 from legged.envs.physics import PhysicsView, Spawn
 from legged.soccer.drills import DrillConfig, DrillEnv
 from legged.soccer.gait_table import advance_phase, filter_command, gait_targets
@@ -94,7 +94,8 @@ class SkillEnv(DrillEnv, abc.ABC):
 class WalkSkillEnv(SkillEnv):
     """op3-walk: one OP3 tracking random velocity commands with the placo gait as its reference.
 
-    Observations: `state` = noisy proprioception (66), command (3), gait clock (sin, cos of 2 pi phase);
+    Observations: `state` = proprioception (66), command (3), the command low-pass filtered as the reference
+    reads it (3), gait clock (sin, cos of 2 pi phase);
     `privileged_state` = the same clean, torso velocity in the torso frame (3), height, uprightness and the
     reference's 20 servo targets."""
 
@@ -129,11 +130,11 @@ class WalkSkillEnv(SkillEnv):
 
     def _rewards(self, info: dict, b: Bodies, metrics: dict) -> dict:
         w, command = self.config.walk_rewards, self.command(info)
-        velocity = yaw_rotate(b.yaw[LEARNER], b.vel[LEARNER, :2])
+        measured = info["velocity_filtered"]  # (vx, vy, yaw rate) low-pass filtered over half a stride
         return {
-            "tracking_lin_vel": w.tracking_lin_vel * jnp.exp(-jnp.sum(jnp.square(command[:2] - velocity))
+            "tracking_lin_vel": w.tracking_lin_vel * jnp.exp(-jnp.sum(jnp.square(command[:2] - measured[:2]))
                                                              / w.lin_vel_sigma ** 2),
-            "tracking_yaw_rate": w.tracking_yaw_rate * jnp.exp(-jnp.square(command[2] - b.gyro[LEARNER, 2])
+            "tracking_yaw_rate": w.tracking_yaw_rate * jnp.exp(-jnp.square(command[2] - measured[2])
                                                                / w.yaw_rate_sigma ** 2),
             "imitation": w.imitation * jnp.exp(-self._pose_error(info, b) / w.imitation_sigma ** 2),
             "upright": w.upright * b.up_z[LEARNER],
@@ -142,7 +143,7 @@ class WalkSkillEnv(SkillEnv):
 
     def _features(self, info: dict, b: Bodies) -> tuple[jnp.ndarray, jnp.ndarray]:
         clock = 2 * jnp.pi * info["gait_phase"]
-        own = jnp.concatenate([self.command(info), jnp.stack([jnp.sin(clock), jnp.cos(clock)])])
+        own = jnp.concatenate([self.command(info), info["gait_command"], jnp.stack([jnp.sin(clock), jnp.cos(clock)])])
         return own, self.reference(info)
 
     def _metrics(self, info: dict, b: Bodies) -> dict:
@@ -152,7 +153,7 @@ class WalkSkillEnv(SkillEnv):
 class GetUpSkillEnv(SkillEnv):
     """op3-getup: one OP3 starting on its front, back or side, learning to stand up and stay up.
 
-    Observations: `state` = noisy proprioception (66), which scripted get-up plays and how far it is (2,
+    Observations: `state` = proprioception (66), which scripted get-up plays and how far it is (2,
     legged.soccer.getup_motion); `privileged_state` = the same clean, torso velocity in the torso frame (3),
     height, uprightness and the reference's 20 servo targets."""
 

@@ -3,7 +3,7 @@
 The anchors (Haarnoja et al. 2024) train soccer end to end from skill teachers on far more compute than this
 project has; here a soccer learner can instead play through a frozen `op3-walk` policy (legged.soccer.skills):
 its action is a (vx, vy, yaw rate) command, which the walker turns into the 20 joint actions at the control
-rate, reading the robot's own proprioception, the command and its gait clock, as it did in training (a
+rate, reading the robot's own proprioception, the command, its low-pass filtered copy and its gait clock, as it did in training (a
 residual walker adds the placo gait's reference at the clock and the filtered command, as in training). Like
 an `Opponent`, the walker is arrays (no Python objects in the step); each robot keeps its walker state, one
 row of `WALKER_STATE_SIZE` floats (gait phase, low-pass filtered command, getting-up flag), in the game's
@@ -85,7 +85,8 @@ class Walker:
         """Joint actions [n, 20] for robots' proprioception [n, 66] (the walk skill's noisy `state` head),
         commanding actions [n, 3] and walker states [n, WALKER_STATE_SIZE]."""
         clock = 2.0 * jnp.pi * state[:, :1]
-        inputs = jnp.concatenate([proprio, self.command(action), jnp.sin(clock), jnp.cos(clock)], axis=-1)
+        inputs = jnp.concatenate([proprio, self.command(action), state[:, 1:4], jnp.sin(clock), jnp.cos(clock)],
+                                 axis=-1)
         out = network_actions(self.net, self.policy, inputs)
         if self.residual:
             targets = jax.vmap(lambda s: gait_targets(self.gait, s[0], s[1:4]))(state)
