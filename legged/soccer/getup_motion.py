@@ -30,7 +30,8 @@ FRONT_GRAVITY_X = 0.5
 """Gravity's x component in the torso frame above which the robot lies face down (the front get-up)."""
 
 _KEY_JOINTS = ("sho_pitch", "sho_roll", "el", "hip_roll", "hip_pitch", "knee", "ank_pitch", "ank_roll")
-"""Left-side joints of a key pose (the right side mirrors them: right = -left), then head_tilt (hip yaw and head pan stay at the default pose's 0)."""
+"""Left-side joints of a key pose (the right side mirrors them: right = -left), then head_tilt (hip yaw and
+head pan stay at the default pose's 0)."""
 
 # (move s, hold s, left sho_pitch, sho_roll, el, hip_roll, hip_pitch, knee, ank_pitch, ank_roll, head_tilt)
 _FRONT = ((0.32, 0.0, 0.126, -0.884, -2.530, -0.031, 0.253, 0.831, 0.522, -0.026, -0.348),

@@ -47,8 +47,9 @@ class SoccerConfig(EnvConfig):
     scene: SoccerSceneConfig = SoccerSceneConfig()
     """Pitch, goals, ball, team sizes and colours."""
     end_on_fall: Literal["agent0", "any", "never"] = "agent0"
-    """Which fall ends the episode (there is no get-up skill yet): agent 0's (the learner's in training),
-    any robot's, or none; a fallen robot that does not end it lies where it fell."""
+    """Which fall ends the episode: agent 0's (the learner's in training), any robot's, or none; a fallen robot
+    that does not end it lies where it fell, unless the players command a walker with a get-up skill
+    (`getup`, legged.soccer.walker), which stands it up again."""
     end_on_goal: bool = False
     """End the episode at a goal; otherwise play restarts from the kick-off poses."""
     spawn_spread: float = 0.5

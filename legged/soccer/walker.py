@@ -3,11 +3,10 @@
 The anchors (Haarnoja et al. 2024) train soccer end to end from skill teachers on far more compute than this
 project has; here a soccer learner can instead play through a frozen `op3-walk` policy (legged.soccer.skills):
 its action is a (vx, vy, yaw rate) command, which the walker turns into the 20 joint actions at the control
-rate, reading the robot's own proprioception, the command, its low-pass filtered copy and its gait clock, as it did in training (a
-residual walker adds the placo gait's reference at the clock and the filtered command, as in training). Like
-an `Opponent`, the walker is arrays (no Python objects in the step); each robot keeps its walker state, one
-row of `WALKER_STATE_SIZE` floats (gait phase, low-pass filtered command, getting-up flag), in the game's
-`info['walker_state']`.
+rate, reading the robot's own proprioception, the command, its low-pass filtered copy and its gait clock, as
+it did in training (a residual walker adds the placo gait's reference at the clock and the filtered command,
+as in training). Like an `Opponent`, the walker is arrays (no Python objects in the step); each robot keeps
+its walker state, one row of `WALKER_STATE_SIZE` floats, in the game's `info['walker_state']`.
 
 With a get-up skill as well (`Walker.getup_motion`), a fall need not end the game: a robot tilted past
 `GETUP_START_UP_Z` hands its joints to the get-up skill until it stands upright near its default pose again
