@@ -227,8 +227,8 @@ class TrainConfig:
                               f"backend, not {cfg.task} with {cfg.backend}")
         if cfg.getup and (not cfg.walker or getattr(cfg.env, "end_on_fall", None) != "never"
                           or not cfg.env.scene.limb_floor_contacts):
-            raise ConfigError("getup (script or an op3-getup run that stands fallen players up) needs walker=OP3_WALK_RUN, "
-                              "env.end_on_fall=never (else a fall ends the game before anyone gets up) and "
+            raise ConfigError("getup (script or an op3-getup run that stands fallen players up) needs "
+                              "walker=OP3_WALK_RUN, env.end_on_fall=never (else a fall ends the game before anyone gets up) and "
                               "env.scene.limb_floor_contacts=true (the skill pushes up with its arms and legs)")
         if cfg.num_envs * cfg.ppo.num_steps_per_env % cfg.ppo.num_mini_batches:
             raise ConfigError(f"num_envs x num_steps_per_env ({cfg.num_envs} x {cfg.ppo.num_steps_per_env}) must "
