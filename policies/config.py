@@ -90,8 +90,9 @@ class LatentConfig:
     history_encoder: Literal["conv", "mlp"] = "conv"
     """Encoder of the `history` group, for every algorithm that reads it: conv (RMA's: each step embedded, then
     1-D convolutions over time; policies.latent_models.HistoryConv) or mlp (on the flattened history)."""
-    kl_weight: float = 1e-3
-    """HIB's alpha: weight of KL(q(z|h) || N(0, I)), the upper bound of I(H; Z)."""
+    kl_weight: float = 1e-2
+    """HIB's alpha: weight of KL(q(z|h) || N(0, I)), the upper bound of I(H; Z) (summed over z's dimensions; at
+    1e-3 it did not bind: the KL rose to 53 nats within 7 iterations, z's standard deviation to about 0.05)."""
     infonce_weight: float = 1.0
     """Weight of the InfoNCE loss, whose negative is the lower bound of I(Z; S^p)."""
     temperature: float = 0.1
