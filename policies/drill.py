@@ -11,11 +11,10 @@ from legged.soccer.drills import DrillConfig, DrillEnv
 from legged.soccer.skill_config import GetUpConfig, WalkSkillConfig
 from legged.soccer.task_config import SoccerConfig
 from policies.evaluate import evaluate
+from policies.policy_io import GETUP_SCRIPT as SCRIPT  # `--player script`: the get-up script open loop
 
 SKILL_DRILLS = {"op3-walk": "walk", "op3-getup": "getup"}
 """Skill tasks (legged.soccer.skills) and the drill each plays, in its own observations."""
-SCRIPT = "script"
-"""`--player script`: ROBOTIS' scripted get-up (legged.soccer.getup_motion) played open loop, getup drill only."""
 
 
 @dataclasses.dataclass
