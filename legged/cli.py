@@ -316,8 +316,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="comma-separated physics engines to measure")
     bs.add_argument("--threads", type=THREADS, default=0, metavar="N",
                     help="threads of native physics (default: every core)")
-    bs.add_argument("--caster", type=choices("c", "jax"), default=["c"],
-                    help="comma-separated ray casters of the cameras under native physics: MuJoCo's C one, JAX's")
+    bs.add_argument("--caster", type=choices("c", "c-unculled", "jax"), default=["c"],
+                    help="comma-separated ray casters of the cameras under native physics: MuJoCo's C one, the "
+                         "same without culling geoms outside each view, JAX's")
     bs.add_argument("--json", action="store_true", help="print a JSON list, one object per measurement")
     bs.add_argument("--quiet", action="store_true", help="no progress messages")
     bs.set_defaults(fn=cmd_bench_soccer)

@@ -114,8 +114,12 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     vector = VectorEnv.of(env, local_envs, config.physics, threads)
     key = jax.random.fold_in(jax.random.fold_in(jax.random.PRNGKey(config.seed), iteration), launch.rank)
     hib = config.algo in ("hib", "hib-no-ib")
+    levels = None if payload is None else payload.get("curriculum_levels")
+    if levels is not None and (launch.distributed or len(levels) != local_envs):
+        levels = None  # saved for another number of environments: they start again from the easiest row
     venv = RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device,
-                     latent_noise=config.latent.latent_dim if hib else 0)
+                     latent_noise=config.latent.latent_dim if hib else 0,
+                     levels=None if levels is None else levels.numpy())
     teacher = None
     if config.algo in DISTILL_ALGOS:
         from policies.distill import load_teacher
@@ -219,7 +223,8 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
             run.log(record, writer)
             if iteration % config.checkpoint_every == 0 or iteration == iterations:
                 save_checkpoint(run, alg, iteration, step, obs_sizes, env.action_size,
-                                opponent_pool=None if pool is None else pool.state_dict())
+                                opponent_pool=None if pool is None else pool.state_dict(),
+                                curriculum_levels=venv.curriculum_levels())
     finally:
         bar.close()
         if writer is not None:
@@ -256,12 +261,15 @@ def _short(value) -> str:
 
 
 def save_checkpoint(run: RunDir, alg, iteration: int, step: int, obs_sizes: dict, num_actions: int,
-                    opponent_pool: dict | None = None) -> Path:
-    """Model, optimiser, counters, RNG state and (soccer self-play) the opponent pool, written atomically."""
+                    opponent_pool: dict | None = None, curriculum_levels: np.ndarray | None = None) -> Path:
+    """Model, optimiser, counters, RNG state, (soccer self-play) the opponent pool and (terrain curricula)
+    each environment's level, written atomically."""
     buffer = io.BytesIO()
     payload = {"backend": "rsl", "alg": alg.save(), "iteration": iteration, "step": step, "obs_sizes": obs_sizes,
                "num_actions": num_actions, "torch_rng": torch.get_rng_state()}
     if opponent_pool is not None:
         payload["opponent_pool"] = _as_tensors(opponent_pool)
+    if curriculum_levels is not None:
+        payload["curriculum_levels"] = torch.from_numpy(curriculum_levels)
     torch.save(payload, buffer)
     return run.write_checkpoint(step, "pt", buffer.getvalue())

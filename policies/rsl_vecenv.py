@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import torch
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
@@ -66,7 +67,7 @@ class RslVecEnv(VecEnv):
     """rsl-rl interface to a batch of MJX environments (auto-reset, time-outs, episode logs)."""
 
     def __init__(self, vector: VectorEnv, seed: int, device: str = "cpu", cfg: dict | None = None,
-                 latent_noise: int = 0):
+                 latent_noise: int = 0, levels: np.ndarray | None = None):
         self.vector = vector
         self.latent_noise = latent_noise
         """Size of the standard-normal `latent_noise` observation drawn at every step (0: none)."""
@@ -76,11 +77,20 @@ class RslVecEnv(VecEnv):
         self.max_episode_length = vector.env.config.episode_steps
         self.device = torch.device(device)
         self.cfg = cfg or {}
-        self.batch = vector.reset(jax.random.PRNGKey(seed))
+        carry = None
+        if levels is not None:  # a resumed run: every environment goes on at its curriculum level
+            carry = {"level": jnp.asarray(levels, jnp.int32), "tile": jnp.full(self.num_envs, -1, jnp.int32)}
+        self.batch = vector.reset(jax.random.PRNGKey(seed), carry)
         self._obs = self.batch.state.obs
         self.episode_stats = EpisodeStats()
         self.env_args = ()
         """Extra arguments of every env step (a soccer LearnerView's opponent), set between iterations."""
+
+    def curriculum_levels(self) -> np.ndarray | None:
+        """Each environment's terrain-curriculum level (None for tasks without one), saved with checkpoints so
+        that a resumed run goes on where it was rather than from the easiest row."""
+        level = self.batch.state.info.get("level")
+        return None if level is None else np.asarray(jax.device_get(level), np.int32)
 
     @property
     def episode_length_buf(self) -> torch.Tensor:

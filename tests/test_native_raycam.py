@@ -39,12 +39,19 @@ def test_c_ray_caster_gives_the_jax_cameras_images(players_per_team):
     datas = _random_states(model, layout, 6)
     batch = jax.tree_util.tree_map(lambda *a: np.stack(a), *(poses_of(d) for d in datas))
     ref = {k: np.asarray(v) for k, v in jax.jit(jax.vmap(lambda p: render(camera, p)))(batch).items()}
-    caster = NativeRayCaster(model, camera, threads=2)
+    poses = [np.stack([getattr(d, k) for d in datas]) for k in ("geom_xpos", "geom_xmat", "cam_xpos", "cam_xmat")]
+    caster, unculled = NativeRayCaster(model, camera, threads=2), NativeRayCaster(model, camera, cull=False)
     try:
-        out = caster.render(*(np.stack([getattr(d, k) for d in datas])
-                              for k in ("geom_xpos", "geom_xmat", "cam_xpos", "cam_xmat")))
+        out, every_geom = caster.render(*poses), unculled.render(*poses)
     finally:
         caster.close()
+    for key in out:  # culling the geoms outside each camera's view changes no pixel...
+        assert np.array_equal(out[key], every_geom[key]), key
+    cam_pos = poses[2][:, camera.camera_ids]
+    in_view = caster._in_view(poses[0], cam_pos, poses[3].reshape(len(datas), -1, 3, 3)[:, camera.camera_ids])
+    assert in_view.mean() < 0.5 and in_view.sum(axis=-1).max() > 1  # ...casts against fewer (measured: 9%)
+    seen = np.isin(caster._cast_ids, out["geom"])
+    assert not (seen & ~in_view.any(axis=(0, 1))).any()  # a geom some image shows was in some view
     for key in ref:
         assert out[key].shape == ref[key].shape and out[key].dtype == ref[key].dtype, key
     assert len(np.unique(ref["geom"])) > 5                                # the states show several things

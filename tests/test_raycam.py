@@ -144,6 +144,34 @@ def test_render_vmaps_over_a_batch_of_states(soccer):
     assert np.array_equal(seg[1], single)
 
 
+def test_numpy_decal_painter_matches_testing_every_decal(soccer):
+    """The C caster's decal painter (a lookup grid of the decals near each point) paints exactly the points a
+    test against every decal paints, with the first decal containing each: on the whole pitch and right at
+    the decals' edges."""
+    from legged.sensors.raycam import _paint_decals_numpy
+
+    camera = soccer[2]
+    decals = camera.decals
+    rng = np.random.default_rng(0)
+    spread = rng.uniform([-5.0, -3.5], [5.0, 3.5], (20000, 2))
+    k = rng.integers(0, len(decals), 20000)
+    local = rng.uniform(-1.0, 1.0, (20000, 2)) * decals[k, 4:6] * rng.choice([0.98, 1.0, 1.02], (20000, 1))
+    edges = decals[k, :2] + local[:, :1] * decals[k, 2:4] + local[:, 1:] * decals[k, 2:4][:, ::-1] * [1, -1]
+    xy = np.concatenate([spread, edges])
+    point = np.concatenate([xy, np.zeros((len(xy), 1))], axis=1)[None]
+    rgb, seg = np.zeros((1, len(xy), 3), np.float32), np.zeros((1, len(xy)), np.int32)
+    painted_rgb, painted_seg = _paint_decals_numpy(camera, point, rgb, seg, np.ones((1, len(xy)), bool))
+    which = np.full(len(xy), -1)
+    for j in range(len(decals) - 1, -1, -1):
+        cx, cy, ax, ay, half_length, half_width = decals[j]
+        dx, dy = xy[:, 0] - cx, xy[:, 1] - cy
+        which[(np.abs(dx * ax + dy * ay) <= half_length) & (np.abs(dx * ay - dy * ax) <= half_width)] = j
+    assert 0.2 < np.mean(which >= 0) < 0.8
+    assert np.array_equal(painted_seg[0] == camera.decal_class, which >= 0)
+    assert np.array_equal(painted_rgb[0][which >= 0], camera.decal_rgb[which[which >= 0]])
+    assert not painted_rgb[0][which < 0].any()
+
+
 def test_config_is_checked():
     with pytest.raises(ValueError, match="width"):
         RayCameraConfig(width=0)

@@ -9,11 +9,12 @@ import numpy as np
 import pytest
 
 from legged.envs.config import RandomizationConfig
-from legged.envs.native import NativeEnvs
+from legged.envs.vector import VectorEnv
 from legged.envs.rough import RoughConfig, RoughEnv, commanded_displacement
 from legged.worlds import WorldError
 from legged.worlds.rough import KINDS, RoughTerrainConfig, rough_terrain
 from policies.evaluate import held_out, ood_config
+from policies.rsl_vecenv import RslVecEnv
 
 SMALL = RoughTerrainConfig(levels=2, tile_size=2.0, border=1.0)
 """Two rows of 2 m tiles: quick to build and to collide with."""
@@ -53,7 +54,7 @@ def rough():
     config = RoughConfig(terrain=SMALL, history_steps=3, episode_seconds=2.0,
                          randomization=RandomizationConfig(enabled=True, push_interval_s=0.1, push_velocity=1.0))
     env = RoughEnv(config)
-    return env, NativeEnvs(env, 4, threads=1)
+    return env, VectorEnv.of(env, 4, "native", threads=1).native
 
 
 def test_history_pushes_and_privileged_terrain(rough):
@@ -103,6 +104,17 @@ def test_curriculum_moves_by_distance_walked_against_what_was_asked(rough):
     assert int(env.carry(info(1.5, False))["tile"]) == -1
     assert float(commanded_displacement(jnp.array([0.6, 0.8, 1.0]), 2.0)) == pytest.approx(2 * np.sin(1.0), rel=1e-6)
     assert float(commanded_displacement(jnp.array([0.6, 0.8, 0.0]), 2.0)) == pytest.approx(2.0, rel=1e-6)
+
+
+def test_a_resumed_run_goes_on_at_each_environments_level(rough):
+    env, _ = rough
+    vector = VectorEnv.of(env, 4, "native", threads=1)
+    assert RslVecEnv(vector, seed=0).curriculum_levels().tolist() == [0, 0, 0, 0]  # a new run: the easiest row
+    saved = np.array([1, 0, 1, 1], np.int32)
+    resumed = RslVecEnv(vector, seed=0, levels=saved)
+    assert resumed.curriculum_levels().tolist() == saved.tolist()
+    tiles = np.asarray(resumed.batch.state.info["tile"])
+    assert env.terrain.difficulties[tiles].tolist() == saved.tolist()  # each plays a tile of its level
 
 
 def test_held_out_and_ood_configs():

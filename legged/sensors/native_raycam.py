@@ -3,9 +3,14 @@ colouring as the JAX renderer (legged.sensors.raycam.images_from_hits), so that 
 
 For the native physics engine: `NativeRayCaster.render` takes the batched geom and camera poses the engine
 reads after each step and returns every camera's images. One `mj_multiRay` call casts all pixel rays of one
-camera (they share the camera's origin; MuJoCo culls geoms by their angular bounds first), in C with the
-GIL released, so the environments are split over a thread pool, each thread with its own scratch MjData
+camera (they share the camera's origin), in C with the GIL released, so the environments are split over a thread pool, each thread with its own scratch MjData
 holding only the poses.
+
+MuJoCo's caster intersects each ray with every geom it does not eliminate (the soccer scenes' bodies carry no
+bounding volumes for its angular culling), so this caster culls first: per camera, the geoms whose bounding
+spheres lie wholly outside the pyramid of its pixel rays are made invisible to that cast (alpha 0 in the
+thread's own copy of the model; MuJoCo's caster skips invisible geoms). No pixel changes; on random soccer
+states a camera casts against about a tenth of the geoms.
 
 One difference from the JAX caster: the JAX camera skips surfaces nearer than the near plane (as OpenGL
 clips them), which is how a head camera sees out of the head it sits in; `mj_multiRay` has no near plane,
@@ -15,6 +20,7 @@ tested (tests/test_native_raycam.py).
 
 from __future__ import annotations
 
+import copy
 from concurrent.futures import ThreadPoolExecutor
 
 import mujoco
@@ -23,10 +29,24 @@ import numpy as np
 from legged.sensors.raycam import RayCamera, camera_rays, images_from_hits
 
 
-class NativeRayCaster:
-    """Renders a RayCamera's images for a batch of poses with MuJoCo's C ray caster on `threads` threads."""
+def frustum_planes(camera: RayCamera) -> np.ndarray:
+    """Inward unit normals of the four side planes of each camera's pyramid of pixel rays, in the camera
+    frame, [n_cam, 4, 3]: a point x (camera frame) is inside where every n . x >= 0."""
+    w, h = camera.config.width, camera.config.height
+    planes = []
+    for dirs in camera.dirs:
+        corners = dirs[[0, w - 1, h * w - 1, (h - 1) * w]]  # pixel rows run along the width
+        normals = np.cross(corners, np.roll(corners, -1, axis=0))
+        normals *= np.sign(normals @ dirs.mean(axis=0))[:, None]  # towards the optical axis
+        planes.append(normals / np.linalg.norm(normals, axis=1, keepdims=True))
+    return np.stack(planes)
 
-    def __init__(self, model: mujoco.MjModel, camera: RayCamera, threads: int = 1):
+
+class NativeRayCaster:
+    """Renders a RayCamera's images for a batch of poses with MuJoCo's C ray caster on `threads` threads
+    (`cull`: skip the geoms outside each camera's view first; the images are the same)."""
+
+    def __init__(self, model: mujoco.MjModel, camera: RayCamera, threads: int = 1, cull: bool = True):
         if threads < 1:
             raise ValueError(f"threads must be >= 1, got {threads}")
         cast = set(map(int, camera.geoms.ids))
@@ -43,9 +63,32 @@ class NativeRayCaster:
         self.index = np.full(model.ngeom, -1, np.int64)
         self.index[camera.geoms.ids] = np.arange(camera.geoms.ids.size)
         self.cutoff = float(camera.config.max_depth / np.min(-camera.dirs[..., 2]))
-        self.threads = threads
+        self.threads, self.cull = threads, cull
         self._datas = [mujoco.MjData(model) for _ in range(threads)]
+        self._cast_ids = np.asarray(camera.geoms.ids, np.int64)
+        self._planes = frustum_planes(camera)
+        self._rbound = model.geom_rbound[self._cast_ids] + 1e-6
+        self._unbounded = model.geom_type[self._cast_ids] == mujoco.mjtGeom.mjGEOM_PLANE
+        self._models = [self._culling_copy(model) for _ in range(threads)] if cull else [model] * threads
         self._pool = ThreadPoolExecutor(threads) if threads > 1 else None
+
+    def _culling_copy(self, model: mujoco.MjModel) -> mujoco.MjModel:
+        """A copy of `model` whose geoms are visible to MuJoCo's caster through their own alpha alone (no
+        materials), with every geom outside the camera's geom set hidden."""
+        own = copy.deepcopy(model)
+        own.geom_matid[:] = -1
+        own.geom_rgba[:, 3] = 0.0
+        own.geom_rgba[self._cast_ids, 3] = 1.0
+        return own
+
+    def _in_view(self, geom_xpos: np.ndarray, cam_pos: np.ndarray, cam_xmat: np.ndarray) -> np.ndarray:
+        """Whether each cast geom's bounding sphere reaches into each camera's pyramid of rays, [N, n_cam,
+        n_geoms] (planes always), from geom positions [N, ngeom, 3], camera origins [N, n_cam, 3] and the
+        cameras' rotations [N, n_cam, 3, 3]."""
+        normals = np.einsum("ncij,ckj->ncki", cam_xmat, self._planes)  # world-frame inward normals
+        offset = geom_xpos[:, None, self._cast_ids, :] - cam_pos[:, :, None, :]
+        inside = np.einsum("ncgi,ncki->ncgk", offset, normals) >= -self._rbound[:, None]
+        return inside.all(axis=-1) | self._unbounded
 
     def render(self, geom_xpos: np.ndarray, geom_xmat: np.ndarray, cam_xpos: np.ndarray, cam_xmat: np.ndarray
                ) -> dict:
@@ -62,12 +105,18 @@ class NativeRayCaster:
                                         np.asarray(cam_xmat[rows], np.float64), np)
             shape = dirs.shape[:-1]  # (rows, n_cam, pixels)
             dist, geom, normal = np.empty(shape), np.empty(shape, np.int32), np.empty(shape + (3,))
-            data = self._datas[k]
+            data, model = self._datas[k], self._models[k]
+            if self.cull:
+                rotations = np.asarray(cam_xmat[rows], np.float64).reshape(len(rows), -1, 3, 3)
+                in_view = self._in_view(np.asarray(geom_xpos[rows]), cam_pos,
+                                        rotations[:, self.camera.camera_ids]).astype(np.float32)
             for j, i in enumerate(rows):
                 data.geom_xpos[:] = geom_xpos[i]
                 data.geom_xmat[:] = xmat[i]
                 for c in range(self.camera.n_cameras):
-                    mujoco.mj_multiRay(self.model, data, cam_pos[j, c], dirs[j, c].ravel(), self.groups, 1,
+                    if self.cull:
+                        model.geom_rgba[self._cast_ids, 3] = in_view[j, c]
+                    mujoco.mj_multiRay(model, data, cam_pos[j, c], dirs[j, c].ravel(), self.groups, 1,
                                        int(self.exclude[c]), geom[j, c], dist[j, c], normal[j, c].reshape(-1),
                                        shape[-1], self.cutoff)
             hit = geom >= 0

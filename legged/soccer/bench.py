@@ -16,8 +16,9 @@ PEER_BATCH = 1
 """dm_control environments timed per setting: its 'batch' is a Python loop, so its rate does not depend on it."""
 
 
-CASTERS = ("c", "jax")
-"""Ray casters of the head cameras under native physics: MuJoCo's in C (legged.sensors.native_raycam), JAX's."""
+CASTERS = ("c", "c-unculled", "jax")
+"""Ray casters of the head cameras under native physics: MuJoCo's in C (legged.sensors.native_raycam), the same
+without culling the geoms outside each camera's view, JAX's."""
 
 
 def soccer_env(players_per_team: int, camera: bool, caster: str = "c"):
@@ -27,7 +28,8 @@ def soccer_env(players_per_team: int, camera: bool, caster: str = "c"):
     if not camera:
         return env
     config = dataclasses.replace(env.config, vision=True,
-                                 camera=dataclasses.replace(env.config.camera, native_caster=caster == "c"))
+                                 camera=dataclasses.replace(env.config.camera, native_caster=caster != "jax",
+                                                            native_cull=caster == "c"))
     return type(env)(config)
 
 
@@ -89,10 +91,10 @@ def bench_soccer(team_sizes=(1, 2), cameras=(False, True), batches=(1, 16), seco
 
 def print_soccer_table(records: list[dict], file=sys.stdout) -> None:
     """Human-readable table of soccer benchmark records."""
-    print(f"{'task':20s} {'physics':8s} {'caster':>6s} {'batch':>6s} {'env steps/s':>12s} {'compile s':>10s} "
+    print(f"{'task':20s} {'physics':8s} {'caster':>10s} {'batch':>6s} {'env steps/s':>12s} {'compile s':>10s} "
           f"{'peer/s':>9s} {'ratio':>8s}", file=file)
     for r in records:
-        print(f"{r['task']:20s} {r['physics']:8s} {r.get('camera_caster') or '-':>6s} {r['batch']:6d} "
+        print(f"{r['task']:20s} {r['physics']:8s} {r.get('camera_caster') or '-':>10s} {r['batch']:6d} "
               f"{r['env_steps_per_s']:12.1f} {r['compile_s']:10.1f} "
               f"{r.get('peer_env_steps_per_s', float('nan')):9.2f} {r.get('ratio_vs_peer', float('nan')):8.2f}",
               file=file)
