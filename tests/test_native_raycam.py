@@ -40,7 +40,8 @@ def test_c_ray_caster_gives_the_jax_cameras_images(players_per_team):
     batch = jax.tree_util.tree_map(lambda *a: np.stack(a), *(poses_of(d) for d in datas))
     ref = {k: np.asarray(v) for k, v in jax.jit(jax.vmap(lambda p: render(camera, p)))(batch).items()}
     poses = [np.stack([getattr(d, k) for d in datas]) for k in ("geom_xpos", "geom_xmat", "cam_xpos", "cam_xmat")]
-    caster, unculled = NativeRayCaster(model, camera, threads=2), NativeRayCaster(model, camera, cull=False)
+    every_geom_camera = dataclasses.replace(camera, config=dataclasses.replace(camera.config, native_cull=False))
+    caster, unculled = NativeRayCaster(model, camera, threads=2), NativeRayCaster(model, every_geom_camera)
     try:
         out, every_geom = caster.render(*poses), unculled.render(*poses)
     finally:

@@ -55,8 +55,7 @@ class NativePhysics:
         fields = ["xpos", "xmat", "actuator_force"] + (list(CAMERA_FIELDS) if env.uses_cameras or cameras else [])
         self._derived = {k: b.bind(k) for k in fields}
         camera = env.native_ray_camera
-        self._caster = None if camera is None else NativeRayCaster(
-            self.model, camera, check_threads(threads), cull=camera.config.native_cull)
+        self._caster = None if camera is None else NativeRayCaster(self.model, camera, check_threads(threads))
         m = self.model
         names = [mujoco.mj_id2name(env.mj_model, mujoco.mjtObj.mjOBJ_GEOM, int(g)) for g in env.watched_geoms]
         adr = [m.sensor(f"contact_{n}").adr[0] for n in names]

@@ -3,8 +3,8 @@ colouring as the JAX renderer (legged.sensors.raycam.images_from_hits), so that 
 
 For the native physics engine: `NativeRayCaster.render` takes the batched geom and camera poses the engine
 reads after each step and returns every camera's images. One `mj_multiRay` call casts all pixel rays of one
-camera (they share the camera's origin), in C with the GIL released, so the environments are split over a thread pool, each thread with its own scratch MjData
-holding only the poses.
+camera (they share the camera's origin), in C with the GIL released, so the environments are split over a
+thread pool, each thread with its own scratch MjData holding only the poses.
 
 MuJoCo's caster intersects each ray with every geom it does not eliminate (the soccer scenes' bodies carry no
 bounding volumes for its angular culling), so this caster culls first: per camera, the geoms whose bounding
@@ -44,9 +44,9 @@ def frustum_planes(camera: RayCamera) -> np.ndarray:
 
 class NativeRayCaster:
     """Renders a RayCamera's images for a batch of poses with MuJoCo's C ray caster on `threads` threads
-    (`cull`: skip the geoms outside each camera's view first; the images are the same)."""
+    (culling the geoms outside each camera's view first unless `camera.config.native_cull` is off)."""
 
-    def __init__(self, model: mujoco.MjModel, camera: RayCamera, threads: int = 1, cull: bool = True):
+    def __init__(self, model: mujoco.MjModel, camera: RayCamera, threads: int = 1):
         if threads < 1:
             raise ValueError(f"threads must be >= 1, got {threads}")
         cast = set(map(int, camera.geoms.ids))
@@ -63,13 +63,13 @@ class NativeRayCaster:
         self.index = np.full(model.ngeom, -1, np.int64)
         self.index[camera.geoms.ids] = np.arange(camera.geoms.ids.size)
         self.cutoff = float(camera.config.max_depth / np.min(-camera.dirs[..., 2]))
-        self.threads, self.cull = threads, cull
+        self.threads, self.cull = threads, camera.config.native_cull
         self._datas = [mujoco.MjData(model) for _ in range(threads)]
         self._cast_ids = np.asarray(camera.geoms.ids, np.int64)
         self._planes = frustum_planes(camera)
         self._rbound = model.geom_rbound[self._cast_ids] + 1e-6
         self._unbounded = model.geom_type[self._cast_ids] == mujoco.mjtGeom.mjGEOM_PLANE
-        self._models = [self._culling_copy(model) for _ in range(threads)] if cull else [model] * threads
+        self._models = [self._culling_copy(model) for _ in range(threads)] if self.cull else [model] * threads
         self._pool = ThreadPoolExecutor(threads) if threads > 1 else None
 
     def _culling_copy(self, model: mujoco.MjModel) -> mujoco.MjModel:
