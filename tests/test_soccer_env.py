@@ -208,3 +208,16 @@ def test_soccer_randomisation_is_one_function_for_both_engines():
         assert not np.allclose(np.asarray(view.mjx_model_for(info).body_mass), m.body_mass)
         rows = view.native_model_fields(jax.tree_util.tree_map(lambda x: np.asarray(x)[None], info), np.array([0]))
         np.testing.assert_allclose(rows["actuator_gainprm"][0], np.asarray(view.mjx_model_for(info).actuator_gainprm))
+
+
+def test_a_kickoff_starts_every_robots_walker_over(game):
+    """After a goal the robots stand at their kick-off poses: mid-stride clocks and filters would not match."""
+    scene = game.env.config.scene
+    info = dict(game.one.info, walker_state=jnp.ones_like(game.one.info["walker_state"]))
+    mid_game = game.one.replace(info=info)
+    behind = scene.field_length / 2 + scene.ball_radius + 0.05
+    after_goal = _with_ball(game, [behind, 0.1, scene.ball_radius], mid_game)
+    assert np.array_equal(after_goal.info["score"], [1, 0])
+    assert np.allclose(after_goal.info["walker_state"], 0.0)
+    play_on = _with_ball(game, [0.5, 0.1, scene.ball_radius], mid_game)
+    assert np.allclose(play_on.info["walker_state"], 1.0)

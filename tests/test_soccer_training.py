@@ -88,3 +88,24 @@ def test_soccer_benchmark_arguments_are_checked(capsys):
 
     assert main(["bench", "soccer", "--team-sizes", "3", "--json"]) == 2
     assert "--team-sizes takes 1 and/or 2" in capsys.readouterr().err
+
+
+def test_a_self_play_snapshot_is_frozen_while_the_learner_trains_on():
+    """Adam and the observation normaliser change the actor in place: a snapshot must not see it."""
+    from rsl_rl.models import MLPModel
+
+    from legged.soccer.opponents import OpponentNet, network_actions
+    from policies.selfplay import snapshot_rsl_actor
+
+    obs = dummy_observations({"state": 6}, 4)
+    actor = MLPModel(obs, {"actor": ["state"]}, "actor", 3, hidden_dims=(8,), obs_normalization=True)
+    x = torch.randn(4, 6)
+    actor.obs_normalizer.update(x)
+    snapshot = snapshot_rsl_actor(actor)
+    before = np.asarray(network_actions(OpponentNet("elu"), snapshot, x.numpy()))
+    with torch.no_grad():
+        for p in actor.parameters():
+            p.add_(1.0)
+        actor.obs_normalizer.update(x + 10.0)
+    after = np.asarray(network_actions(OpponentNet("elu"), snapshot, x.numpy()))
+    assert np.array_equal(before, after)

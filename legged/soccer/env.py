@@ -156,6 +156,10 @@ class SoccerEnv(MjxEnv):
         info["truncation"] = (time_out & ~ended).astype(jnp.float32)
         data, info["teleported"], kickoff = self._restart(data, call, done)
         info["players"] = jnp.where(kickoff, initial_memory(self.n_agents), info["players"])  # scripts start over
+        # robots stand still at their kick-off poses: actions, walkers' clocks, filters and get-ups start over
+        info["last_action"] = jnp.where(kickoff, 0.0, info["last_action"])
+        info["last_qvel"] = jnp.where(kickoff, 0.0, info["last_qvel"])
+        info["walker_state"] = jnp.where(kickoff, 0.0, info["walker_state"])
 
         metrics = {f"reward/{k}": v for k, v in terms.items()}
         score = info["score"].astype(jnp.float32)

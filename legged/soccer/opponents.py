@@ -55,8 +55,8 @@ class OpponentNet:
 
 
 def network_opponent(mean, std, layers) -> Opponent:
-    """An opponent that plays with a network (numpy or jax arrays)."""
-    f32 = lambda x: jnp.asarray(x, jnp.float32)
+    """An opponent that plays with a network (numpy or jax arrays), copied: it never changes with them."""
+    f32 = lambda x: jnp.array(x, jnp.float32, copy=True)  # asarray may alias a numpy view of torch memory
     return Opponent(jnp.float32(1.0), f32(mean), f32(std), tuple((f32(w), f32(b)) for w, b in layers),
                     jnp.float32(0.0))
 
