@@ -100,6 +100,15 @@ def test_a_commanding_learner_and_its_opponents_walk_through_the_walker():
     np.testing.assert_allclose(phase, view.dt / float(walker.gait.period), atol=1e-6)  # every robot's clock runs
 
 
+def test_a_walker_must_step_at_the_games_control_rate():
+    from legged.tasks import learner_env, task_entry
+
+    game = make("soccer-1v1", dataclasses.replace(make("soccer-1v1").config, ctrl_dt=0.05))
+    layers = [(np.zeros((PROPRIO_SIZE + 8, 20)), np.zeros(20))]
+    with pytest.raises(ValueError, match="set env.ctrl_dt=0.025"):
+        learner_env(task_entry("soccer-1v1"), game, walker=_walker(layers))
+
+
 def test_a_walker_must_be_an_op3_walk_run(tmp_path):
     from policies.config import ConfigError, TrainConfig
     from policies.policy_io import load_walker
