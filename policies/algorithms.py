@@ -23,6 +23,7 @@ from __future__ import annotations
 import contextlib
 import io
 
+import torch
 from rsl_rl.algorithms import PPO, Distillation
 from tensordict import TensorDict
 
@@ -157,8 +158,20 @@ def build_algorithm(config: TrainConfig, obs: TensorDict, num_envs: int, num_act
                 raise ValueError(f"--algo {config.algo} needs the teacher run's config")
             cfg = distill_train_cfg(config, teacher, launch.multi_gpu_config(), camera)
             return cfg["algorithm"]["class_name"].construct_algorithm(obs, _Shapes(num_envs, num_actions), cfg, device)
-        return PPO.construct_algorithm(obs, _Shapes(num_envs, num_actions),
-                                       ppo_train_cfg(config, camera, launch.multi_gpu_config()), device)
+        alg = PPO.construct_algorithm(obs, _Shapes(num_envs, num_actions),
+                                      ppo_train_cfg(config, camera, launch.multi_gpu_config()), device)
+    if config.ppo.zero_action_init:
+        zero_output_layer(alg.actor)
+    return alg
+
+
+def zero_output_layer(actor: torch.nn.Module) -> None:
+    """Set the last linear layer of `actor`'s MLP to zero: its mean action starts at 0 (a residual policy then
+    plays its reference) and learns from there (that layer's gradient is not zero)."""
+    last = [m for m in actor.mlp.modules() if isinstance(m, torch.nn.Linear)][-1]
+    with torch.no_grad():
+        last.weight.zero_()
+        last.bias.zero_()
 
 
 def privileged_slices(layout: dict, names=DYNAMICS_GROUPS) -> list[slice]:

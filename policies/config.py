@@ -52,6 +52,8 @@ class PPOConfig:
     """Hidden activation."""
     init_noise_std: float = 1.0
     """Initial standard deviation of the Gaussian policy."""
+    zero_action_init: bool = False
+    """Start the actor's output layer at zero (rsl backend), so a residual skill first plays its reference."""
     obs_normalization: bool = True
     """Running mean/std normalisation of observations (rsl-rl backend; Brax PPO always normalises)."""
     obs_std_floor: float = 0.01
@@ -213,6 +215,8 @@ class TrainConfig:
         if cfg.backend == "brax" and getattr(cfg.env, "curriculum", False):
             raise ConfigError("the confined curriculum needs the rsl backend (Brax PPO's resets cannot hand an "
                               "episode's level to the next); add --set env.curriculum=false for --backend brax")
+        if cfg.ppo.zero_action_init and cfg.backend != "rsl":
+            raise ConfigError("ppo.zero_action_init needs the rsl backend")
         if cfg.init_from and cfg.backend != "rsl":
             raise ConfigError("init_from (a warm start) needs the rsl backend")
         if cfg.num_envs > 2**20 or cfg.timesteps > 10**12:

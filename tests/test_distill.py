@@ -74,6 +74,19 @@ def test_privileged_encoders_skip_the_state_copy():
         assert torch.allclose(z(obs), z(kept)) and not torch.allclose(z(obs), z(moved))
 
 
+def test_zero_action_init_starts_an_actor_at_a_zero_mean_that_still_learns():
+    obs = observations(8, np.random.default_rng(4))
+    for algo in ("ppo", "hib"):
+        plain = build_algorithm(config(algo), obs, 8, 12, "cpu")
+        alg = build_algorithm(apply_overrides(config(algo), ["ppo.zero_action_init=true"]), obs, 8, 12, "cpu")
+        assert torch.count_nonzero(plain.actor(obs)) > 0 and torch.count_nonzero(alg.actor(obs)) == 0
+        alg.actor(obs).sum().backward()
+        last = [m for m in alg.actor.mlp.modules() if isinstance(m, torch.nn.Linear)][-1]
+        assert torch.count_nonzero(last.weight.grad) > 0
+    with pytest.raises(ConfigError, match="zero_action_init needs the rsl backend"):
+        apply_overrides(TrainConfig(task="go1-flat", backend="brax").resolved(), ["ppo.zero_action_init=true"])
+
+
 def test_probe_sees_linear_information_only():
     rng = np.random.default_rng(0)
     features = rng.normal(size=(400, 6))
