@@ -9,6 +9,7 @@ import numpy as np
 from tqdm import tqdm
 
 from legged.tasks import task_entry
+from legged.envs.curriculum import level_carry
 from legged.envs.vector import VectorEnv
 from policies.policy_io import actor_observation
 
@@ -86,7 +87,7 @@ def confined_eval_config(env_config, difficulty: int, episodes: int, world_seed:
 
 def one_tile_each(first: int, count: int, tiles: int) -> dict:
     """Carry of evaluation episodes first..first+count: episode k plays tile k (mod the number of tiles)."""
-    return {"level": np.zeros(count, np.int32), "tile": (np.arange(first, first + count) % tiles).astype(np.int32)}
+    return level_carry(np.zeros(count), np.arange(first, first + count) % tiles)
 
 
 def soccer_opponent(spec: str, env, policy=None):

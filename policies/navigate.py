@@ -17,6 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from legged.envs.confined import ConfinedEnv
+from legged.envs.curriculum import level_carry
 from legged.envs.vector import VectorEnv
 from legged.tasks import task_entry
 from legged.worlds.maps import HeightMaps
@@ -117,7 +118,7 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
     except RunDirError as exc:
         raise NavigationError(str(exc)) from None
     vector = VectorEnv(env, 1, physics, threads)
-    batch = vector.reset(jax.random.PRNGKey(seed), {"level": np.zeros(1, np.int32), "tile": np.zeros(1, np.int32)})
+    batch = vector.reset(jax.random.PRNGKey(seed), level_carry(np.zeros(1), 0))
     if on_step is not None:
         on_step(env, batch.state, plan)
     obs, replans, failed_replans, walked = batch.state.obs, 0, 0, 0.0

@@ -17,6 +17,7 @@ import torch
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
+from legged.envs.curriculum import level_carry
 from legged.envs.vector import VectorEnv
 from policies.latent_models import NOISE_GROUP
 
@@ -79,7 +80,7 @@ class RslVecEnv(VecEnv):
         self.cfg = cfg or {}
         carry = None
         if levels is not None:  # a resumed run: every environment goes on at its curriculum level
-            carry = {"level": jnp.asarray(levels, jnp.int32), "tile": jnp.full(self.num_envs, -1, jnp.int32)}
+            carry = level_carry(levels)
         self.batch = vector.reset(jax.random.PRNGKey(seed), carry)
         self._obs = self.batch.state.obs
         self.episode_stats = EpisodeStats()

@@ -24,7 +24,14 @@ def pick_tile(rng: jax.Array, carry: dict | None, tile_level: jax.Array, n_level
     return tile, tile_level[tile]
 
 
+def level_carry(level, tile=-1) -> dict:
+    """The carry a new episode starts from: its curriculum `level` and a `tile` (-1: drawn at that level),
+    each a scalar or one per environment."""
+    level = jnp.asarray(level, jnp.int32)
+    return {"level": level, "tile": jnp.broadcast_to(jnp.asarray(tile, jnp.int32), level.shape)}
+
+
 def next_level(level: jax.Array, up: jax.Array, down: jax.Array) -> dict:
     """The carry of a finished episode: one level up, or down (never below 0), and no tile of its own."""
     level = level + up.astype(jnp.int32) - (down & ~up).astype(jnp.int32)
-    return {"level": jnp.maximum(level, 0).astype(jnp.int32), "tile": jnp.int32(-1)}
+    return level_carry(jnp.maximum(level, 0))
