@@ -8,7 +8,7 @@ import dataclasses
 import numpy as np
 
 from legged.soccer.drills import DrillConfig, DrillEnv
-from legged.soccer.skill_config import GetUpConfig, WalkSkillConfig
+from legged.soccer.skill_config import GetUpConfig
 from legged.soccer.task_config import SoccerConfig
 from policies.evaluate import evaluate
 from policies.policy_io import GETUP_SCRIPT as SCRIPT  # `--player script`: the get-up script open loop
@@ -78,14 +78,13 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
     run = None if player in ("placo", SCRIPT) else RunDir(player).load_config()
     with_randomization = lambda config: dataclasses.replace(
         config, randomization=dataclasses.replace(config.randomization, enabled=randomize))
-    if run is not None and run.task == "op3-walk":
-        return skills.WalkSkillEnv(with_randomization(WalkSkillConfig(
-            command_seconds=drill.command_seconds, command_low=drill.command_low, command_high=drill.command_high,
-            residual=run.env.residual)))
+    if run is not None and run.task == "op3-walk":  # the run's own config (what it trained on), drill commands
+        return skills.WalkSkillEnv(with_randomization(dataclasses.replace(
+            run.env, command_seconds=drill.command_seconds, command_low=drill.command_low,
+            command_high=drill.command_high, episode_seconds=20.0)))
     if player == SCRIPT or (run is not None and run.task == "op3-getup"):  # the script: the reference, no policy
-        residual = True if run is None else run.env.residual
-        return skills.GetUpSkillEnv(with_randomization(GetUpConfig(episode_seconds=drill.getup_seconds,
-                                                                   residual=residual)))
+        base = GetUpConfig() if run is None else run.env
+        return skills.GetUpSkillEnv(with_randomization(dataclasses.replace(base, episode_seconds=drill.getup_seconds)))
     walker = None
     if run is not None and run.walker:  # a soccer player that commands a walking skill
         from policies.policy_io import load_walker
