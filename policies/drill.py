@@ -106,8 +106,8 @@ def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "
               "randomized": randomize, "fall_rate": float(fell.mean()),
               "episode_seconds": float(np.mean([f["time_s"] for f in finals]))}
     if name == "walk":
-        report.update({k: float(np.mean([f[k] for f in finals]))
-                       for k in ("speed_mps", "tracking_error_mps", "smoothed_tracking_error_mps")})
+        walk = ("speed_mps", "tracking_error_mps", "smoothed_tracking_error_mps", "smoothed_yaw_rate_error_radps")
+        report.update({k: float(np.mean([f[k] for f in finals])) for k in walk})
     elif name == "getup":
         stood = np.array([f["stood"] > 0 for f in finals])
         report.update(success_rate=float(stood.mean()),

@@ -142,7 +142,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     elif config.init_from:
         from policies.warm_start import warm_start
 
-        note = warm_start(alg, Path(config.init_from), env, venv.get_observations())
+        note = warm_start(alg, Path(config.init_from), env, venv.get_observations(), config.task)
         if progress and launch.is_main:
             print(note)
     pool = None

@@ -1,5 +1,6 @@
 """Warm start: begin a PPO run from the networks of a trained run of another task (e.g. the confined
-follower from the go1-flat walker).
+follower from the go1-flat walker), or of the same task (its networks as they are, e.g. to go on with new
+rewards).
 
 The two tasks' observations differ, so the first layer is rebuilt input by input from the observations'
 named layouts (`LeggedEnv.observation_layout`): an input both tasks have keeps its weights and its
@@ -88,11 +89,37 @@ def source_layout(run_path: Path) -> tuple[dict, Path]:
     return env.observation_layout(), run.latest_checkpoint()
 
 
-def warm_start(alg, run_path: Path, env, obs) -> str:
-    """Load `run_path`'s latest actor and critic into `alg` (rsl-rl PPO of `env`) through the observation
-    layouts; `obs` is a first batch of observations (statistics of the new inputs). Returns a summary."""
+def same_task_start(alg, run_path: Path, task: str) -> str | None:
+    """Load the latest actor and critic (normalisers and action noise included) of `run_path` into `alg` as they
+    are, if that run trained `task` with rsl-rl (a new run of the same task, e.g. with other rewards); None if
+    it trained another task. Returns a summary."""
     from policies.rsl_backend import load_checkpoint
 
+    run = RunDir(Path(run_path))
+    config = run.load_config()
+    if config.task != task or config.backend != "rsl":
+        return None
+    path = run.latest_checkpoint()
+    saved = load_checkpoint(path)["alg"]
+    for net, key in ((alg.actor, "actor_state_dict"), (alg.critic, "critic_state_dict")):
+        try:
+            net.load_state_dict(saved[key])
+        except RuntimeError as e:
+            raise RunDirError(f"cannot warm start from {path}: its {key.split('_')[0]} does not fit this run's "
+                              f"(use the source run's ppo.actor_hidden, ppo.critic_hidden and observations): "
+                              f"{str(e).splitlines()[0]}") from None
+    return f"warm start from {path}: the same task, every weight and normaliser statistic as they were"
+
+
+def warm_start(alg, run_path: Path, env, obs, task: str = "") -> str:
+    """Load `run_path`'s latest actor and critic into `alg` (rsl-rl PPO of `env`, training `task`): as they are
+    if the source trained the same task, else through the observation layouts; `obs` is a first batch of
+    observations (statistics of the new inputs). Returns a summary."""
+    from policies.rsl_backend import load_checkpoint
+
+    same = same_task_start(alg, run_path, task)
+    if same is not None:
+        return same
     if not hasattr(env, "observation_layout"):
         raise RunDirError(f"cannot warm start this task ({type(env).__name__}): it has no named observation layout")
     layout, path = source_layout(run_path)

@@ -101,6 +101,25 @@ def test_warm_started_follower_acts_as_the_walker_on_shared_inputs():
     assert torch.allclose(a, b, atol=1e-5)
 
 
+def test_warm_start_from_the_same_task_copies_every_weight():
+    """A new go1-flat run started from a go1-flat run: actor, critic, normalisers and noise as they were; a
+    network of other sizes is refused, naming the settings to use."""
+    from policies.run_dir import RunDirError
+
+    sizes = make("go1-flat").observation_dims()
+    obs = dummy_observations(sizes, 8)
+    ppo = PPOConfig(actor_hidden=(128, 128, 128), critic_hidden=(128, 128, 128))
+    new = build_ppo(obs, 8, 12, ppo, "cpu")
+    note = warm_start(new, WALKER, None, obs, "go1-flat")
+    assert "same task" in note
+    payload = torch.load(sorted((WALKER / "checkpoints").glob("*.pt"))[-1], weights_only=True)["alg"]
+    for net, key in ((new.actor, "actor_state_dict"), (new.critic, "critic_state_dict")):
+        for name, value in net.state_dict().items():
+            assert torch.equal(value, payload[key][name]), name
+    with pytest.raises(RunDirError, match="ppo.actor_hidden"):
+        warm_start(build_ppo(obs, 8, 12, PPOConfig(actor_hidden=(64, 64)), "cpu"), WALKER, None, obs, "go1-flat")
+
+
 def test_navigation_geometry():
     """How far the robot is from its plan, and its pose from a free joint (the replanning trigger)."""
     import mujoco

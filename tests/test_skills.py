@@ -60,6 +60,14 @@ def test_playing_the_reference_earns_the_imitation_reward(env):
                                                        played["tracking_error_mps"])
 
 
+def test_walk_drill_measures_the_yaw_rate_error():
+    """A robot that stands still while told to turn at 0.4 rad/s (and walk 0.1 m/s) misses both by all of it."""
+    still = _rollout(make("op3-walk", residual=False, command_low=(0.1, 0.0, 0.4), command_high=(0.1, 0.0, 0.4)),
+                     "zero", steps=40)
+    assert abs(still["smoothed_yaw_rate_error_radps"] - 0.4) < 0.05
+    assert abs(still["smoothed_tracking_error_mps"] - 0.1) < 0.02
+
+
 def test_getup_starts_lying_and_rewards_rising():
     getup = make("op3-getup", residual=False)  # zero actions hold the default pose (no script)
     assert getup.observation_dims() == {"state": 68, "privileged_state": 93}

@@ -221,3 +221,39 @@ def test_a_kickoff_starts_every_robots_walker_over(game):
     assert np.allclose(after_goal.info["walker_state"], 0.0)
     play_on = _with_ball(game, [0.5, 0.1, scene.ball_radius], mid_game)
     assert np.allclose(play_on.info["walker_state"], 1.0)
+
+
+def test_approach_offset_aims_vel_to_ball_behind_the_ball():
+    """A home robot beside the ball (attacking +x) walking toward the goal passes the ball: no reward for it
+    at offset 0 (it moves across the bearing to the ball), a penalty with an offset (it leaves the spot behind
+    the ball); walking back toward that spot is rewarded; lined up behind the ball it walks into it."""
+    from legged.soccer.config import SoccerSceneConfig
+    from legged.soccer.pitch import goal_centres
+    from legged.soccer.rewards import reward_terms
+    from legged.soccer.rules import BallCall
+    from legged.soccer.task_config import SoccerRewards
+
+    zeros = jnp.zeros((2, 20))
+
+    def vel_to_ball(offset: float, vx: float, at=(1.0, 0.3)) -> float:
+        b = observe.Bodies(pos=jnp.array([[at[0], at[1], 0.24], [-2.0, 0.0, 0.24]]),
+                           rot=jnp.tile(jnp.eye(3), (2, 1, 1)), vel=jnp.array([[vx, 0.0, 0.0], [0.0, 0.0, 0.0]]),
+                           gyro=jnp.zeros((2, 3)), q=zeros, qd=zeros, ball_pos=jnp.array([1.0, 0.0, 0.07]),
+                           ball_vel=jnp.zeros(3))
+        no = jnp.array(False)
+        terms = reward_terms(SoccerRewards(vel_to_ball=1.0, approach_offset=offset), b, BallCall(no, no, no),
+                             np.array([0, 1]), goal_centres(SoccerSceneConfig()), jnp.zeros(2), zeros, zeros, zeros,
+                             zeros, jnp.tile(jnp.array([-3.0, 3.0]), (2, 20, 1)), 0.025)
+        return float(terms["vel_to_ball"][0])
+
+    assert vel_to_ball(0.0, 0.2) == pytest.approx(0.0, abs=1e-6)
+    assert vel_to_ball(0.3, 0.2) == pytest.approx(-0.2 / np.sqrt(2), abs=1e-5)   # spot at (0.7, 0)
+    assert vel_to_ball(0.3, -0.2) == pytest.approx(0.2 / np.sqrt(2), abs=1e-5)
+    # lined up behind the ball (past the spot at 0.7): walking into the ball is rewarded, as at offset 0
+    assert vel_to_ball(0.3, 0.2, at=(0.8, 0.0)) == pytest.approx(0.2, abs=1e-5)
+    # at 45 degrees behind the ball the spot sits (1 - cos 45 deg) of the offset behind it
+    spot = np.array([1.0 - 0.3 * (1.0 - np.cos(np.pi / 4)), 0.0])
+    expected = float(np.dot([0.2, 0.0], spot - [0.6, -0.4]) / np.linalg.norm(spot - [0.6, -0.4]))
+    assert vel_to_ball(0.3, 0.2, at=(0.6, -0.4)) == pytest.approx(expected, abs=1e-5)
+    with pytest.raises(ValueError, match="approach_offset"):
+        make("soccer-1v1", rewards=SoccerRewards(approach_offset=-0.1))

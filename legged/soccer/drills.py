@@ -4,7 +4,8 @@
   (a new one every `command_seconds`) for 20 s; reported: `speed_mps` (mean planar speed),
   `tracking_error_mps` (mean |commanded - actual| planar velocity in the heading frame),
   `smoothed_tracking_error_mps` (the same with the velocity low-pass filtered over `velocity_filter_s`, which
-  averages out the torso's sway within each step), `fall_rate`.
+  averages out the torso's sway within each step), `smoothed_yaw_rate_error_radps` (mean |commanded - actual|
+  yaw rate, filtered the same way), `fall_rate`.
 - `empty-goal`: the ball rests 1-2 m in front of the opponent goal, the robot starts 0.5-1.5 m from it at
   any bearing, turned anyhow; the episode ends at a goal (or a fall, or 20 s); reported: `goal_rate`.
 - `getup`: the robot starts lying at the centre spot (on its front, back or a side, any heading, joints
@@ -119,8 +120,8 @@ class DrillEnv(LearnerView):
         low, high = jnp.asarray(self.drill.command_low), jnp.asarray(self.drill.command_high)
         commands = low + (high - low) * jax.random.uniform(k_cmd, (self._segments, 3))
         info = dict(spawn.info, commands=commands, speed_sum=jnp.float32(0.0), error_sum=jnp.float32(0.0),
-                    smoothed_error_sum=jnp.float32(0.0), velocity_filtered=jnp.zeros(3, jnp.float32),
-                    standing_steps=jnp.int32(0), stood_step=jnp.int32(-1))
+                    smoothed_error_sum=jnp.float32(0.0), yaw_error_sum=jnp.float32(0.0),
+                    velocity_filtered=jnp.zeros(3, jnp.float32), standing_steps=jnp.int32(0), stood_step=jnp.int32(-1))
         return Spawn(qpos=qpos, qvel=qvel, ctrl=spawn.ctrl, info=info)
 
     def _lying(self, qpos, yaw, rng):
@@ -174,6 +175,7 @@ class DrillEnv(LearnerView):
             min(1.0, self.dt / self.drill.velocity_filter_s) * (measured - info["velocity_filtered"])
         info["smoothed_error_sum"] = info["smoothed_error_sum"] + \
             jnp.linalg.norm(self.command(info)[:2] - info["velocity_filtered"][:2])
+        info["yaw_error_sum"] = info["yaw_error_sum"] + jnp.abs(self.command(info)[2] - info["velocity_filtered"][2])
         info["standing_steps"] = jnp.where(self.standing(b), info["standing_steps"] + 1, 0)
         held = info["standing_steps"] * self.dt >= self.drill.stand_hold_s - 1e-6
         info["stood_step"] = jnp.where((info["stood_step"] < 0) & held, info["step"] + 1, info["stood_step"])
@@ -186,6 +188,7 @@ class DrillEnv(LearnerView):
         metrics = {"fell": mine.metrics["fell"], "goals_for": mine.metrics["goals_for"],
                    "speed_mps": mine.info["speed_sum"] / steps, "tracking_error_mps": mine.info["error_sum"] / steps,
                    "smoothed_tracking_error_mps": mine.info["smoothed_error_sum"] / steps,
+                   "smoothed_yaw_rate_error_radps": mine.info["yaw_error_sum"] / steps,
                    "time_s": mine.info["step"] * self.dt, "stood": (mine.info["stood_step"] >= 0).astype(jnp.float32),
                    "time_to_stand_s": mine.info["stood_step"].astype(jnp.float32) * self.dt}
         return mine.replace(metrics=metrics)

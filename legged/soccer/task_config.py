@@ -19,7 +19,12 @@ class SoccerRewards:
     goal: float = 1.0
     """+1 when the agent's team scores, -1 when it concedes (times this)."""
     vel_to_ball: float = 0.05
-    """Times the torso's horizontal velocity toward the ball, m/s."""
+    """Times the torso's horizontal velocity toward the ball (or the spot `approach_offset` behind it), m/s."""
+    approach_offset: float = 0.0
+    """vel_to_ball aims up to this far behind the ball, on the line from the opponent goal through it, metres
+    (0: at the ball): the full offset for a robot beside or in front of the ball, none for one lined up behind
+    it (scaled by 1 - the cosine between its bearing to the ball and the ball's direction to the goal), so that
+    robots line up first and then walk the ball goalwards."""
     ball_vel_to_goal: float = 0.1
     """Times the ball's horizontal velocity toward the opponent goal, m/s (the same for both teammates)."""
     upright: float = 0.5
@@ -71,6 +76,8 @@ class SoccerConfig(EnvConfig):
 
     def __post_init__(self):
         self.randomization.validate()
+        if self.rewards.approach_offset < 0:
+            raise ValueError(f"rewards.approach_offset must be non-negative, got {self.rewards.approach_offset}")
         if self.end_on_fall not in ("agent0", "any", "never"):
             raise ValueError(f"end_on_fall must be 'agent0', 'any' or 'never', got {self.end_on_fall!r}")
         if self.spawn_spread < 0 or self.restart_inset < 0:
