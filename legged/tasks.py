@@ -120,10 +120,11 @@ def make(task: str, config=None, **overrides):
     return entry.factory(config)
 
 
-def learner_env(entry: TaskEntry, env, activation: str = "elu", hidden: tuple[int, ...] = (), walker=None):
+def learner_env(entry: TaskEntry, env, activation: str = "elu", hidden: tuple[int, ...] = (), walker=None,
+                teacher_prior: bool = False):
     """The single-agent environment trainers step: `env` itself, or for soccer agent 0's view of the game
     (the other robots driven by opponents handed to each step; `activation` and `hidden` shape them; with a
-    `legged.soccer.walker.Walker` the players command velocities)."""
+    `legged.soccer.walker.Walker` the players command velocities; `teacher_prior`: legged.soccer.learner)."""
     if entry.kind != "soccer":
         if walker is not None:
             raise ValueError(f"a walker drives soccer players; {entry.name} is a {entry.kind} task")
@@ -134,4 +135,4 @@ def learner_env(entry: TaskEntry, env, activation: str = "elu", hidden: tuple[in
     if walker is not None and abs(walker.dt - env.dt) > 1e-9:  # its gait clock would run at the wrong speed
         raise ValueError(f"the walker was trained with env.ctrl_dt={walker.dt:g}; this game steps every "
                          f"{env.dt:g} s: set env.ctrl_dt={walker.dt:g}")
-    return LearnerView(env, OpponentNet(activation), hidden, walker)
+    return LearnerView(env, OpponentNet(activation), hidden, walker, teacher_prior)

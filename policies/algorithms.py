@@ -25,6 +25,7 @@ import io
 
 import torch
 from rsl_rl.algorithms import PPO, Distillation
+from rsl_rl.models import MLPModel
 from tensordict import TensorDict
 
 from policies.config import HISTORY_ALGOS, PPOConfig, TrainConfig
@@ -112,6 +113,28 @@ def ppo_train_cfg(config: TrainConfig, camera: bool = False, multi_gpu: dict | N
     }
 
 
+class PriorCorrector(MLPModel):
+    """The actor of a state soccer player whose commands corrected the placo player's (command_prior=placo), as
+    its vision student's teacher: its outputs, and its Gaussian's mean, are the whole command, its corrections
+    added to the observation `command_prior` (the student's game gives it; legged.soccer.learner)."""
+
+    def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False):
+        mean = self.mlp(self.get_latent(obs, masks, hidden_state)) + obs["command_prior"]
+        if stochastic_output:
+            self.distribution.update(mean)
+            return self.distribution.sample()
+        return self.distribution.deterministic_output(mean)
+
+
+def teacher_model(teacher: TrainConfig) -> dict:
+    """rsl-rl model config of a distillation's teacher: the `teacher` run's actor (a PriorCorrector for a state
+    player with command_prior)."""
+    cfg = actor_model(teacher, teacher.ppo.init_noise_std)
+    if teacher.command_prior:
+        cfg["class_name"] = PriorCorrector
+    return cfg
+
+
 def distill_train_cfg(config: TrainConfig, teacher: TrainConfig, multi_gpu: dict | None = None,
                       camera: bool = False) -> dict:
     """rsl-rl's train_cfg of a distillation (dagger, rma) from the `teacher` run's config."""
@@ -127,7 +150,7 @@ def distill_train_cfg(config: TrainConfig, teacher: TrainConfig, multi_gpu: dict
                       "learning_rate": d.learning_rate, "num_learning_epochs": d.num_learning_epochs,
                       "gradient_length": d.gradient_length, "max_grad_norm": config.ppo.max_grad_norm},
         "student": student,
-        "teacher": actor_model(teacher, teacher.ppo.init_noise_std),
+        "teacher": teacher_model(teacher),
         "obs_groups": {"student": actor_inputs(config.algo, camera), "teacher": teacher_inputs(teacher)},
         "num_steps_per_env": config.ppo.num_steps_per_env,
         "multi_gpu": multi_gpu,
@@ -192,7 +215,7 @@ def attach_teacher_kl(alg: PPO, config: TrainConfig, teacher: TrainConfig, paylo
 
     from policies.teacher_kl import TeacherKL
 
-    cls, kwargs = resolve_class(actor_model(teacher, teacher.ppo.init_noise_std))
+    cls, kwargs = resolve_class(teacher_model(teacher))
     model = cls(obs, {"teacher": teacher_inputs(teacher)}, "teacher", payload["num_actions"], **kwargs)
     model.load_state_dict(payload["alg"]["actor_state_dict"], strict=True)
     d = config.distill

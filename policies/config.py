@@ -72,7 +72,11 @@ class SelfPlayConfig:
     pool_size: int = 8
     """Snapshots kept (the oldest is dropped)."""
     scripted_fraction: float = 0.2
-    """Chance that an iteration plays the script instead of a snapshot (always, while the pool is empty)."""
+    """Chance that a draw picks the script instead of a snapshot (always, while the pool is empty)."""
+    draw_per_game: bool = True
+    """A drawn opponent plays until a game ends (in any environment), so that one with a memory (the placo
+    player's walk and kick) plays whole games; false: a new draw every iteration (what runs before 2026-11-26
+    did; their configs lack the field and resume with the new default)."""
     script: Literal["placo", "standing"] = "placo"
     """The script: the placo player (walks to the ball and kicks it) or the standing goalkeeper."""
 
@@ -123,6 +127,9 @@ class DistillConfig:
     """kl: initial weight of KL(teacher || student) added to the student's PPO loss (policies.teacher_kl)."""
     kl_decay: float = 0.995
     """kl: factor applied to that weight after every iteration."""
+    teacher_prior: bool = False
+    """Set by `legged distill`: the teacher (a state soccer player, command_prior=placo) corrected the placo
+    player's command, which its vision student's game then gives as the observation `command_prior`."""
 
 
 ALGOS = ("ppo", "teacher", "hib", "hib-no-ib", "history", "dagger", "rma", "kl")
@@ -174,6 +181,9 @@ class TrainConfig:
     walker: str = ""
     """Soccer tasks: run directory of an op3-walk policy; the learner then commands velocities that this frozen
     walker turns into joint actions (legged.soccer.walker). '' : the learner drives the joints itself."""
+    command_prior: str = ""
+    """Soccer tasks with a walker: `placo` makes the learner's actions corrections added to the placo player's
+    walking command (to the spot behind the ball, lined up on the goal); '' : its actions are the command."""
     getup: str = ""
     """Soccer tasks with a walker: how a fallen robot gets up, `script` (ROBOTIS' scripted get-up) or the run
     directory of an op3-getup policy (needs env.end_on_fall=never, so that a fall does not end the game, and
@@ -230,6 +240,10 @@ class TrainConfig:
         if cfg.walker and (entry.kind != "soccer" or cfg.backend != "rsl"):
             raise ConfigError(f"walker (an op3-walk run the learner commands) is for soccer tasks with the rsl "
                               f"backend, not {cfg.task} with {cfg.backend}")
+        if cfg.command_prior not in ("", "placo") or (cfg.command_prior and not cfg.walker):
+            raise ConfigError(f"command_prior must be '' or 'placo' (with walker=OP3_WALK_RUN: corrections to the "
+                              f"placo player's walking command), got {cfg.command_prior!r}"
+                              + ("" if cfg.walker else " without a walker"))
         if cfg.getup and (not cfg.walker or getattr(cfg.env, "end_on_fall", None) != "never"
                           or not cfg.env.scene.limb_floor_contacts):
             raise ConfigError("getup (script or an op3-getup run that stands fallen players up) needs "

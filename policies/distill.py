@@ -13,6 +13,9 @@ Two kinds of teacher:
   (`--task soccer-1v1-vision`) from proprioception and the head camera; the teacher reads the state features
   the vision task gives as `features`. Methods: dagger (as above) and kl (the anchors' KL-regularised RL,
   policies.teacher_kl). A teacher that commands a walker (`walker`) passes it on: the student commands it too.
+  A teacher whose commands corrected the placo player's (`command_prior`) is taught whole: its student's game
+  observes that command (`command_prior`), the teacher's outputs add it (policies.algorithms.PriorCorrector),
+  and the student, which cannot see the ball's state, learns the whole command from the camera.
 """
 
 from __future__ import annotations
@@ -152,8 +155,9 @@ def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps:
     if task not in (None, teacher.task):  # a vision student: the teacher's game, seen through the camera
         if method == "rma":
             raise ConfigError("rma regresses a privileged teacher's latent; a vision student learns by dagger or kl")
-        changes.update(task=task, env=dataclasses.replace(teacher.env, vision=True),
-                       selfplay=dataclasses.replace(teacher.selfplay, opponent="scripted"))
+        changes.update(task=task, env=dataclasses.replace(teacher.env, vision=True), command_prior="",
+                       selfplay=dataclasses.replace(teacher.selfplay, opponent="scripted"),
+                       distill=dataclasses.replace(changes["distill"], teacher_prior=bool(teacher.command_prior)))
     for name, value in (("timesteps", timesteps), ("physics", physics), ("num_envs", num_envs), ("threads", threads)):
         if value is not None:
             changes[name] = value

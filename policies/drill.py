@@ -89,7 +89,7 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
     if run is not None and run.walker:  # a soccer player that commands a walking skill
         from policies.policy_io import load_walker
 
-        walker = load_walker(run.walker, run.getup)
+        walker = load_walker(run.walker, run.getup, run.command_prior)
     return DrillEnv(drill, with_randomization(SoccerConfig()), placo=player == "placo", walker=walker)
 
 

@@ -116,6 +116,10 @@ def soccer_opponent(spec: str, env, policy=None):
         mine = "commands a walker" if env.walker is not None else "drives its joints"
         raise ValueError(f"--opponent {spec}: the learner {mine}, the opponent run "
                          f"{'commands a walker' if config.walker else 'drives its joints'}: both must do the same")
+    if bool(config.command_prior) != (env.walker is not None and env.walker.prior is not None):
+        raise ValueError(f"--opponent {spec}: its commands are{'' if config.command_prior else ' not'} corrections "
+                         "to the placo player's (command_prior), the learner's are"
+                         f"{' not' if config.command_prior else ''}: both must do the same")
     policy, _ = load_policy(spec)
     if policy.inputs != ("state",) or policy.obs_sizes["state"] != size:
         raise ValueError(f"--opponent {spec}: its actor reads {policy.obs_sizes['state']} state features; the "

@@ -135,10 +135,11 @@ def load_policy(run_dir: str | Path, checkpoint: str | Path | None = None) -> tu
     return loader(config, path), config
 
 
-def load_walker(run_dir: str | Path, getup: str | Path = ""):
+def load_walker(run_dir: str | Path, getup: str | Path = "", prior: str = ""):
     """The frozen walking skill of an op3-walk run (`legged.soccer.walker.Walker`), for soccer players that
     command velocities, with a get-up skill when `getup` names one: `script` (ROBOTIS' scripted get-up alone)
-    or an op3-getup run; ValueError naming what is wrong when a run is not what it should be."""
+    or an op3-getup run, and with `prior` `placo` the players' actions corrections to the placo player's
+    command; ValueError naming what is wrong when a run is not what it should be."""
     from legged.soccer.gait_table import load_gait_table
     from legged.soccer.getup_motion import getup_motion
     from legged.soccer.opponents import OpponentNet
@@ -160,6 +161,10 @@ def load_walker(run_dir: str | Path, getup: str | Path = ""):
     from legged.robots.op3 import OP3
 
     skill = {}
+    if prior:
+        from legged.soccer.placo_player import load_tables
+
+        skill["prior"] = load_tables()
     if getup:
         skill["getup_motion"] = getup_motion()
     if learned:

@@ -24,6 +24,7 @@ from policies.algorithms import (  # noqa: F401 (build_ppo: a re-export)
     attach_teacher_kl,
     build_algorithm,
     build_ppo,
+    privileged_slices,
 )
 from policies.config import DISTILL_ALGOS, TrainConfig
 from policies.distributed import Launch, init_torch_processes
@@ -163,23 +164,27 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                desc=f"{config.task} rsl", disable=not (progress and launch.is_main))
     obs = venv.get_observations()
     alg.train_mode()
+    opponent, game_over = None, False  # the pool's draw, and whether a game ended since it was drawn
     layout = env.observation_layout() if config.algo != "ppo" and hasattr(env, "observation_layout") else None
+    if layout is not None and not privileged_slices(layout):  # no randomised dynamics to probe (soccer)
+        layout = None
     earlier = run.metrics() if resume else []
     wall0 = time.perf_counter() - ((earlier[-1].get("wall_s") or 0.0) if earlier else 0.0)  # resumed runs go on
     try:
         while iteration < iterations:
             t0 = time.perf_counter()
             reward_sum = torch.zeros((), device=device)
-            opponent = None
-            if pool is not None:
+            if pool is not None and (opponent is None or game_over or not config.selfplay.draw_per_game):
                 opponent, data = pool.sample()
                 venv.env_args = (data, pool.teammate()) if env.game.layout.players_per_team > 1 else (data,)
+            game_over = False
             with torch.inference_mode():
                 for _ in range(ppo.num_steps_per_env):
                     actions = alg.act(obs)
                     obs, rewards, dones, extras = venv.step(actions)
                     alg.process_env_step(obs, rewards, dones, extras)
                     reward_sum += rewards.mean()
+                    game_over = game_over or bool(dones.any())
                 alg.compute_returns(obs)
             diagnostics = {}
             if layout is not None and (iteration + 1) % config.checkpoint_every == 0:
@@ -234,7 +239,6 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
 
 def probe_rollout(alg, layout: dict) -> dict:
     """The linear probe of the policy's latent (policies.probe) on the rollout just collected."""
-    from policies.algorithms import privileged_slices
     from policies.latent_models import latent_features
     from policies.probe import probe_r2
 

@@ -71,6 +71,21 @@ class RunDir:
         self._atomic_write(self.config_path, yaml.safe_dump(to_dict(config), sort_keys=False).encode())
         return self
 
+    def discard_unstarted(self) -> bool:
+        """Remove a run that `create` made but that failed before its first checkpoint or metrics record (e.g.
+        a warm start that did not fit), so that the same command can be run again; True if removed."""
+        if self.checkpoints() or self.metrics_path.exists():
+            return False
+        for leftover in (self.config_path, *self.path.glob(".*.tmp"), *self.checkpoint_dir.glob(".*.tmp"),
+                         *(self.path / "tb").glob("events.out.tfevents.*")):
+            leftover.unlink(missing_ok=True)
+        for folder in (self.checkpoint_dir, self.path / "tb", self.path):
+            try:
+                folder.rmdir()
+            except OSError:  # not empty (something else lives there) or already gone: leave it
+                pass
+        return True
+
     def load_config(self) -> TrainConfig:
         """The run's resolved config."""
         if not self.config_path.is_file():

@@ -26,8 +26,9 @@ def build_env(config: TrainConfig, progress: bool = True):
     if config.walker:
         from policies.policy_io import load_walker
 
-        walker = load_walker(config.walker, config.getup)
-    return learner_env(entry, env, config.ppo.activation, config.ppo.actor_hidden, walker)
+        walker = load_walker(config.walker, config.getup, config.command_prior)
+    return learner_env(entry, env, config.ppo.activation, config.ppo.actor_hidden, walker,
+                       config.distill.teacher_prior)
 
 
 def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> dict:
@@ -73,7 +74,12 @@ def start_run(task: str, run_dir: str | None, backend: str = "rsl", num_envs: in
         run.create(config)
     if progress and main:
         print(f"[train] run directory {run.path}", flush=True)
-    return _train(config, run, resume=False, progress=progress)
+    try:
+        return _train(config, run, resume=False, progress=progress)
+    except Exception:
+        if main:
+            run.discard_unstarted()  # a run that never started must not block the same command's retry
+        raise
 
 
 def resume_run(run_dir: str, progress: bool = True) -> dict:

@@ -148,6 +148,25 @@ def test_others_come_teammates_first():
     assert observe.others_of(Layout()).tolist() == [[1, 2, 3], [0, 2, 3], [3, 0, 1], [2, 0, 1]]
 
 
+def test_the_named_layout_covers_the_observations_and_maps_1v1_onto_2v2():
+    """A 1v1 player's ball, goals and opponent reach a 2v2 player's (warm start); the teammate and the second
+    opponent are new inputs."""
+    from legged.soccer.learner import LearnerView
+    from policies.warm_start import element_names, input_map
+
+    layouts = {}
+    for task in ("soccer-1v1", "soccer-2v2", "soccer-1v1-vision"):
+        env = LearnerView(make(task))
+        layouts[task] = layout = env.observation_layout()
+        dims = env.observation_dims()
+        assert {k: sum(n for _, n in v) for k, v in layout.items()} == {k: dims[k] for k in layout}, task
+    names = {t: element_names(layouts[t]["state"]) for t in ("soccer-1v1", "soccer-2v2")}
+    mapping = input_map(names["soccer-1v1"], names["soccer-2v2"])
+    for i, name in enumerate(names["soccer-2v2"]):
+        expected = -1 if name.startswith(("teammate0", "opponent1")) else names["soccer-1v1"].index(name)
+        assert mapping[i] == expected, name
+
+
 def test_opponents_are_data_and_the_script_watches_the_ball():
     obs = jnp.zeros((3, 80)).at[:, observe.PROPRIO_SIZE:observe.PROPRIO_SIZE + 3].set(jnp.array([1.0, 1.0, 0.0]))
     scripted = scripted_opponent(80, 20, (8,))

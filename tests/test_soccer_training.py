@@ -30,7 +30,8 @@ def test_self_play_snapshots_become_opponents_without_recompiling(tmp_path, monk
     monkeypatch.setattr(env, "prepare", lambda *args: (traces.append(len(args)), real_prepare(*args))[1])
     run_dir = tmp_path / "selfplay"
     training.start_run("soccer-1v1", str(run_dir), num_envs=2, timesteps=30, progress=False, physics="native",
-                       threads=1, overrides=TINY + ["selfplay.snapshot_every=1", "selfplay.scripted_fraction=0.0"])
+                       threads=1, overrides=TINY + ["selfplay.snapshot_every=1", "selfplay.scripted_fraction=0.0",
+                                                    "selfplay.draw_per_game=false"])
     records = RunDir(run_dir).metrics()
     assert [r["opponent"] for r in records][0] == -1  # the pool starts empty: the script plays
     assert all(r["opponent"] >= 0 for r in records[1:]) and [r["opponent_pool"] for r in records] == [1, 2, 3]
@@ -42,6 +43,16 @@ def test_self_play_snapshots_become_opponents_without_recompiling(tmp_path, monk
     assert traces == [3]  # script and snapshots, all passed as data: the step was traced (compiled) once
     ended = [r for r in records if r["episodes"]]
     assert ended and {"episode_goals_for", "episode_goals_against", "episode_reward_goal"} <= set(ended[0])
+
+    per_game = tmp_path / "per-game"  # the default: a drawn opponent plays until a game ends
+    training.start_run("soccer-1v1", str(per_game), num_envs=2, timesteps=80, progress=False, physics="native",
+                       threads=1, overrides=TINY + ["selfplay.snapshot_every=1", "selfplay.scripted_fraction=0.0"])
+    records = RunDir(per_game).metrics()
+    draws = [i for i in range(1, len(records)) if records[i - 1]["episodes"]]  # iterations after a game ended
+    assert draws and all(records[i]["opponent"] >= 0 for i in draws)
+    held = [i for i in range(1, len(records)) if i not in draws]
+    assert held and all(records[i]["opponent"] == records[i - 1]["opponent"] for i in held)
+    assert records[0]["opponent"] == -1 and records[draws[0] - 1]["opponent"] == -1  # the first game: the script
 
 
 def test_camera_tasks_get_a_cnn_actor_that_saves_loads_and_acts(tmp_path):

@@ -148,6 +148,21 @@ def test_bad_input_fails_before_training(tiny_env, tmp_path, capsys):
     assert main(["eval", str(tmp_path), "--episodes", "2"]) == 2
 
 
+def test_a_run_that_fails_to_start_leaves_nothing_behind(tmp_path, capsys):
+    from legged.cli import main
+
+    source = RunDir(tmp_path / "src").create(TrainConfig(task="go1-flat", backend="brax").resolved())
+    command = ["train", "go1-flat", "--physics", "native", "--num-envs", "4", "--timesteps", "96",
+               "--run-dir", str(tmp_path / "new"), "--init-from", str(source.path)]
+    for _ in range(2):  # the retry meets the same error, not "already holds a run"
+        assert main(command) == 2
+        assert "brax backend" in capsys.readouterr().err
+        assert not (tmp_path / "new").exists()
+    started = RunDir(tmp_path / "kept").create(TrainConfig(task="go1-flat").resolved())
+    started.write_checkpoint(96, "pt", b"x")
+    assert not started.discard_unstarted() and started.config_path.exists()
+
+
 def test_overrides_round_trip_through_yaml(tmp_path):
     config = apply_overrides(TrainConfig(task="confined-waypoints").resolved(),
                              ["ppo.learning_rate=3e-4", "env.world.tunnel_width=1.4", "env.difficulties=[2]"])

@@ -89,3 +89,37 @@ def test_a_vision_student_learns_from_the_state_player(soccer_teacher, tmp_path,
     assert cfg.task == "soccer-1v1-vision" and cfg.env.vision and cfg.algo == method
     assert student.inputs == ("state", "camera") and student.num_actions == 20
     assert dataclasses.replace(cfg.env, vision=False) == RunDir(soccer_teacher).load_config().env
+
+
+def test_a_teacher_that_corrected_the_placo_command_teaches_the_whole_command(tmp_path):
+    from rsl_rl.utils import resolve_class
+
+    from legged.soccer.learner import LearnerView
+    from legged.tasks import make
+    from policies.algorithms import teacher_model
+    from policies.distill import start_distill
+    from policies.policy_io import load_policy, load_walker
+
+    walker = "assets/policies/op3-walker"
+    cfg = apply_overrides(TrainConfig(task="soccer-1v1", physics="native", threads=1, num_envs=2, timesteps=8,
+                                      checkpoint_every=1, walker=walker, command_prior="placo").resolved(), TINY)
+    sizes = LearnerView(make("soccer-1v1"), walker=load_walker(walker, prior="placo")).observation_dims()
+    obs = dummy_observations(sizes, 2)
+    obs["features"], obs["command_prior"] = torch.randn(2, sizes["state"]), torch.randn(2, 3)
+    cls, kwargs = resolve_class(teacher_model(cfg))
+    corrector = cls(obs, {"teacher": ["features"]}, "teacher", 3, **kwargs)
+    plain = MLPModel(obs, {"teacher": ["features"]}, "teacher", 3, **kwargs)
+    plain.load_state_dict(corrector.state_dict())
+    torch.testing.assert_close(corrector(obs), plain(obs) + obs["command_prior"])
+    corrector(obs, stochastic_output=True)
+    plain(obs, stochastic_output=True)
+    torch.testing.assert_close(corrector.output_mean, plain.output_mean + obs["command_prior"])
+
+    teacher = RunDir(tmp_path / "teacher").create(cfg)
+    save_checkpoint(teacher, build_algorithm(cfg, dummy_observations(sizes, 2), 2, 3, "cpu"), 1, 8, sizes, 3)
+    record = start_distill(str(teacher.path), "dagger", str(tmp_path / "student"), timesteps=16, progress=False,
+                           task="soccer-1v1-vision")
+    assert record["step"] == 16 and np.isfinite(record["loss_behavior"])
+    student, scfg = load_policy(tmp_path / "student")
+    assert scfg.command_prior == "" and scfg.distill.teacher_prior and scfg.walker == walker
+    assert student.inputs == ("state", "camera") and student.num_actions == 3

@@ -100,6 +100,45 @@ def test_a_commanding_learner_and_its_opponents_walk_through_the_walker():
     np.testing.assert_allclose(phase, view.dt / float(walker.gait.period), atol=1e-6)  # every robot's clock runs
 
 
+def test_with_the_placo_prior_actions_correct_the_placo_players_command():
+    """A walker that copies the command into joints 0-2: with zero actions the learner and a network opponent
+    walk the placo player's command for their own game features; an action adds to it, in action units."""
+    from legged.soccer.placo_player import load_tables, request_from_features
+    from policies.config import ConfigError, TrainConfig
+
+    size = PROPRIO_SIZE + 8
+    w = np.zeros((size, 20), np.float32)
+    w[PROPRIO_SIZE:PROPRIO_SIZE + 3, :3] = np.eye(3)
+    walker = dataclasses.replace(_walker([(w, np.zeros(20, np.float32))]), prior=load_tables())
+    view = LearnerView(make("soccer-1v1"), walker=walker)
+    features = view.game.policy_state_size
+    opponent = network_opponent(np.zeros(features), np.ones(features),
+                                [(np.zeros((features, 3), np.float32), np.zeros(3, np.float32))])
+    vector = VectorEnv.of(view, 2, "native", 1)
+    batch = vector.reset(jax.random.PRNGKey(4))
+    seen = np.asarray(batch.state.info["game_obs"]["privileged_state"])[:, :, :features]  # [env, robot, features]
+    batch, _ = vector.step(batch, jnp.asarray([[0.0, 0.0, 0.0], [0.0, 0.0, 0.5]]), opponent)
+    tables = load_tables()
+    asked = np.asarray(jax.vmap(jax.vmap(lambda f: request_from_features(tables, f)[0]))(jnp.asarray(seen)))
+    expected = np.clip(asked, WALK.command_low, WALK.command_high)
+    expected[1, 0, 2] = min(expected[1, 0, 2] + 0.25 * (WALK.command_high[2] - WALK.command_low[2]),
+                            WALK.command_high[2])
+    assert np.abs(asked[:, :, 2]).max() > 0.05  # the script does ask something of each robot
+    np.testing.assert_allclose(np.asarray(batch.state.info["last_action"])[:, :, :3], expected, atol=1e-5)
+    with pytest.raises(ValueError, match="a vision player does not observe"):
+        LearnerView(make("soccer-1v1-vision"), walker=walker)
+    plain = dataclasses.replace(walker, prior=None)  # a vision student's: it commands the whole command
+    student = VectorEnv.of(LearnerView(make("soccer-1v1-vision"), walker=plain, teacher_prior=True), 2, "native", 1)
+    obs = student.reset(jax.random.PRNGKey(4)).state.obs
+    np.testing.assert_allclose(np.asarray(obs["command_prior"]),
+                               np.asarray(plain.prior_actions(obs["features"], tables)), atol=1e-6)
+    np.testing.assert_allclose(np.asarray(plain.command(obs["command_prior"])),
+                               np.clip(np.asarray(jax.vmap(lambda f: request_from_features(tables, f)[0])(
+                                   obs["features"])), WALK.command_low, WALK.command_high), atol=1e-5)
+    with pytest.raises(ConfigError, match="command_prior must be"):
+        TrainConfig(task="soccer-1v1", command_prior="placo").resolved()
+
+
 def test_a_walker_must_step_at_the_games_control_rate():
     from legged.tasks import learner_env, task_entry
 

@@ -168,14 +168,15 @@ class DrillEnv(LearnerView):
         b = read_bodies(self.game.layout, view.qpos, view.qvel)
         velocity = yaw_rotate(b.yaw[0], b.vel[0, :2])
         info = dict(state.info)
+        command = self.command(info)
         info["speed_sum"] = info["speed_sum"] + jnp.linalg.norm(velocity)
-        info["error_sum"] = info["error_sum"] + jnp.linalg.norm(self.command(info)[:2] - velocity)
+        info["error_sum"] = info["error_sum"] + jnp.linalg.norm(command[:2] - velocity)
         measured = jnp.concatenate([velocity, b.gyro[0, 2:]])
         info["velocity_filtered"] = info["velocity_filtered"] + \
             min(1.0, self.dt / self.drill.velocity_filter_s) * (measured - info["velocity_filtered"])
         info["smoothed_error_sum"] = info["smoothed_error_sum"] + \
-            jnp.linalg.norm(self.command(info)[:2] - info["velocity_filtered"][:2])
-        info["yaw_error_sum"] = info["yaw_error_sum"] + jnp.abs(self.command(info)[2] - info["velocity_filtered"][2])
+            jnp.linalg.norm(command[:2] - info["velocity_filtered"][:2])
+        info["yaw_error_sum"] = info["yaw_error_sum"] + jnp.abs(command[2] - info["velocity_filtered"][2])
         info["standing_steps"] = jnp.where(self.standing(b), info["standing_steps"] + 1, 0)
         held = info["standing_steps"] * self.dt >= self.drill.stand_hold_s - 1e-6
         info["stood_step"] = jnp.where((info["stood_step"] < 0) & held, info["step"] + 1, info["stood_step"])

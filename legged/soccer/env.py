@@ -213,6 +213,14 @@ class SoccerEnv(MjxEnv):
             obs["camera"] = observe.camera_observation(images, c.camera.max_depth)
         return obs
 
+    def observation_layout(self) -> dict:
+        """Named slices of each player's `state` and `privileged_state` (`privileged_state` begins with the
+        clean features, named `state/...`; in vision games `state` is the proprioception alone)."""
+        features = observe.feature_layout(self.layout.players_per_team)
+        state = features[:1] if self.config.vision else features
+        return {"state": state, "privileged_state": [(f"state/{n}", k) for n, k in features]
+                + [("truth", observe.PRIVILEGED_SIZE)]}
+
     @property
     def policy_state_size(self) -> int:
         """Length of the full egocentric feature vector (the state tasks' `state`): the first entries of

@@ -31,13 +31,21 @@ LEARNER = 0
 class LearnerView(MjxEnv):
     """Agent 0 of `game` as a Brax-style single-agent environment; `step(state, action, opponent=None)`
     (the opponent drives every other robot; None: the script). With `walker` the actions are velocity
-    commands (legged.soccer.walker)."""
+    commands (legged.soccer.walker); with `teacher_prior` (vision games) the observations also hold
+    `command_prior`, the placo player's command as actions, which a state teacher's corrections add to."""
 
     def __init__(self, game: SoccerEnv, net: OpponentNet = OpponentNet(), hidden: tuple[int, ...] = (),
-                 walker: Walker | None = None):
+                 walker: Walker | None = None, teacher_prior: bool = False):
+        if teacher_prior and (walker is None or not game.config.vision):
+            raise ValueError("teacher_prior (the placo command a vision student's teacher corrected) needs a walker "
+                             "and a vision game")
+        if walker is not None and walker.prior is not None and game.config.vision:
+            raise ValueError("a walker with the placo command prior reads the ball and goals from the player's state "
+                             "features, which a vision player does not observe: its student must command the walker "
+                             "itself (no prior)")
         if game.camera is not None:  # the learner's observations need its own camera only
             game.camera = game.camera.select([LEARNER])
-        self.game, self.net, self.walker = game, net, walker
+        self.game, self.net, self.walker, self.teacher_prior = game, net, walker, teacher_prior
         self.config, self.robot = game.config, game.robot
         self.mj_model, self.mjx_model = game.mj_model, game.mjx_model
         self.default_opponent = scripted_opponent(game.policy_state_size, self.action_size, hidden)
@@ -89,8 +97,10 @@ class LearnerView(MjxEnv):
         walker_state = state.info["walker_state"]
         if self.walker is None:
             return action, walker_state
-        proprio = state.info["game_obs"]["state"][LEARNER:LEARNER + 1, :PROPRIO_SIZE]
+        features = state.info["game_obs"]["state"][LEARNER:LEARNER + 1]
+        proprio = features[:, :PROPRIO_SIZE]
         mine = walker_state[LEARNER:LEARNER + 1]
+        action = self.walker.with_prior(action[None], features)[0]
         joints = self.walker.actions(proprio, action[None], mine)[0]
         return joints, walker_state.at[LEARNER].set(self.walker.step(mine, action[None], proprio)[0])
 
@@ -105,6 +115,9 @@ class LearnerView(MjxEnv):
         game_obs = info.pop("game_obs")
         game = State(view, game_obs, jnp.zeros(self.game.n_agents), state.done, {}, info)
         return self._view(self.game.transition(game, view, actions))
+
+    def observation_layout(self) -> dict:
+        return self.game.observation_layout()
 
     @property
     def uses_cameras(self) -> bool:
@@ -130,4 +143,6 @@ class LearnerView(MjxEnv):
         metrics.update(goals_for=game.metrics["goals_home"], goals_against=game.metrics["goals_away"])
         info = {**game.info, "game_obs": game.obs}
         obs = {k: v[LEARNER] for k, v in game.obs.items()}
+        if self.teacher_prior:  # what the teacher's corrections were added to, from the state it reads
+            obs["command_prior"] = self.walker.prior_actions(obs["features"][None], self.tables)[0]
         return State(game.pipeline_state, obs, game.reward[LEARNER], game.done, metrics, info)

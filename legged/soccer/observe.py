@@ -97,6 +97,18 @@ def game_features(b: Bodies, team: np.ndarray, goals: np.ndarray, others: np.nda
     return jnp.concatenate([ball, ball_vel, own, opp, players], -1)
 
 
+PRIVILEGED_SIZE = 17
+"""Length of `privileged_features`."""
+
+
+def feature_layout(players_per_team: int) -> list[tuple[str, int]]:
+    """Named slices of a player's egocentric features (proprioception, then `game_features`): the layout a
+    warm start maps inputs by, so that a 1v1 player's ball, goals and opponent reach a 2v2 player's."""
+    return ([("proprio", PROPRIO_SIZE), ("ball", 3), ("ball_vel", 3), ("own_goal", 2), ("opponent_goal", 2)]
+            + [(f"teammate{i}", 4) for i in range(players_per_team - 1)]
+            + [(f"opponent{i}", 4) for i in range(players_per_team)])
+
+
 def privileged_features(b: Bodies, team: np.ndarray, score, time_fraction) -> jnp.ndarray:
     """[A, 17] ground truth in each team's own pitch frame (the away team's is turned by 180 degrees, so
     both teams attack +x): torso velocity in the torso frame (3), torso height (1), position (2), heading

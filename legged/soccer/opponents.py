@@ -121,7 +121,7 @@ def opponent_step(net: OpponentNet, opp: Opponent, obs, memory, tables, action_s
     if walker is None:
         stateless, stepped = opponent_actions(net, opp, obs, action_scale), walker_state
     else:
-        command = network_actions(net, opp, obs)
+        command = walker.with_prior(network_actions(net, opp, obs), obs)
         walked = walker.actions(obs[..., :PROPRIO_SIZE], command, walker_state)
         stateless = jnp.where(opp.weight > 0.5, walked, scripted_actions(obs, action_scale))
         stepped = walker.step(walker_state, command, obs[..., :PROPRIO_SIZE])

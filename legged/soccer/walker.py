@@ -27,7 +27,7 @@ import jax.numpy as jnp
 from legged.soccer.gait_table import GaitTable, advance_phase, filter_command, gait_targets
 from legged.soccer.getup_motion import GetUpMotion, lies_on_back, motion_features, motion_targets
 from legged.soccer.opponents import Opponent, OpponentNet, network_actions
-from legged.soccer.placo_player import actions_of
+from legged.soccer.placo_player import PlacoTables, actions_of, request_from_features
 
 COMMAND_SIZE = 3
 """A commanding player's action: (vx, vy, yaw rate), each in [-1, 1] of the walker's command range."""
@@ -74,6 +74,21 @@ class Walker:
     """How the get-up actor's layers are joined."""
     getup_residual: bool = True
     """The get-up actor's actions are corrections added to the script's (op3-getup's `residual`)."""
+    prior: PlacoTables | None = None
+    """With the placo player's tables, a commanding player's actions are corrections added to the placo player's
+    walking command (to the spot behind the ball, lined up on the goal; `with_prior`); None: the command itself."""
+
+    def with_prior(self, action: jax.Array, features: jax.Array) -> jax.Array:
+        """Commanding actions [n, 3] with the prior's command added (from the robots' game features [n, obs]:
+        legged.soccer.observe), or as they are without a prior."""
+        return action if self.prior is None else action + self.prior_actions(features, self.prior)
+
+    def prior_actions(self, features: jax.Array, tables: PlacoTables) -> jax.Array:
+        """The placo player's walking command for robots' game features [n, obs], as commanding actions [n, 3]
+        (not clipped: `command` clips the sum)."""
+        request = jax.vmap(lambda f: request_from_features(tables, f)[0])(features)
+        low, high = jnp.asarray(self.command_low), jnp.asarray(self.command_high)
+        return 2.0 * (request - low) / (high - low) - 1.0
 
     def command(self, action: jax.Array) -> jax.Array:
         """The velocity command [..., 3] of commanding actions [..., 3] (clipped to [-1, 1])."""
