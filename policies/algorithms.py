@@ -32,9 +32,10 @@ from policies.config import HISTORY_ALGOS, PPOConfig, TrainConfig
 from policies.distributed import Launch
 from policies.latent_models import NOISE_GROUP, LatentActor
 
-CAMERA_CNN = {"output_channels": [16, 32, 32], "kernel_size": [5, 3, 3], "stride": [2, 2, 1], "padding": "zeros",
-              "activation": "elu", "global_pool": "avg", "flatten": True}
-"""The actor's image encoder when the task has a `camera` observation (40 x 30 -> 20 x 15 -> 10 x 8 -> 32)."""
+CAMERA_CNN = {"output_channels": [16, 32, 32], "kernel_size": [5, 3, 3], "stride": [2, 2, 2], "padding": "zeros",
+              "activation": "elu", "global_pool": "none", "flatten": True}
+"""The actor's image encoder when the task has a `camera` observation (40 x 30 -> 20 x 15 -> 10 x 7 -> 5 x 3, 32
+channels, flattened to 480: no global pooling, which would lose where in the image the ball and goals are)."""
 
 DYNAMICS_GROUPS = ("dynamics", "com", "motor_strength")
 """Entries of `privileged_state` that hold an episode's randomised parameters (probe targets, HIB negatives)."""
@@ -116,14 +117,16 @@ def ppo_train_cfg(config: TrainConfig, camera: bool = False, multi_gpu: dict | N
 class PriorCorrector(MLPModel):
     """The actor of a state soccer player whose commands corrected the placo player's (command_prior=placo), as
     its vision student's teacher: its outputs, and its Gaussian's mean, are the whole command, its corrections
-    added to the observation `command_prior` (the student's game gives it; legged.soccer.learner)."""
+    added to the observation `command_prior` (the student's game gives it; legged.soccer.learner). Its
+    deterministic output, a DAgger label, is clipped to the walker's command range [-1, 1], as the walker
+    clips it (`Walker.command`): beyond the range every command walks the same."""
 
     def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False):
         mean = self.mlp(self.get_latent(obs, masks, hidden_state)) + obs["command_prior"]
         if stochastic_output:
             self.distribution.update(mean)
             return self.distribution.sample()
-        return self.distribution.deterministic_output(mean)
+        return self.distribution.deterministic_output(mean).clamp(-1.0, 1.0)
 
 
 def teacher_model(teacher: TrainConfig) -> dict:

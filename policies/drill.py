@@ -48,9 +48,9 @@ def check_player(spec: str, drill: DrillConfig) -> None:
             raise ValueError(f"--player {spec}: an {config.task} policy does the {SKILL_DRILLS[config.task]} drill, "
                              f"not {drill.name}")
         return
-    if task_entry(config.task).kind != "soccer" or task_entry(config.task).vision:
+    if task_entry(config.task).kind != "soccer" or config.env.scene.players_per_team != 1:
         raise ValueError(f"--player {spec}: a drill player is placo, a skill run ({', '.join(SKILL_DRILLS)}) or a "
-                         f"run of soccer-1v1 (state), not {config.task}")
+                         f"run of soccer-1v1 or soccer-1v1-vision, not {config.task}")
     if drill.name in ("walk", "getup"):
         raise ValueError(f"--player {spec}: the {drill.name} drill needs placo or an "
                          f"{next(t for t, d in SKILL_DRILLS.items() if d == drill.name)} run; {config.task} "
@@ -90,7 +90,10 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
         from policies.policy_io import load_walker
 
         walker = load_walker(run.walker, run.getup, run.command_prior)
-    return DrillEnv(drill, with_randomization(SoccerConfig()), placo=player == "placo", walker=walker)
+    game = SoccerConfig() if run is None else dataclasses.replace(  # a vision player sees through its own camera
+        SoccerConfig(), vision=run.env.vision, camera=run.env.camera)
+    return DrillEnv(drill, with_randomization(game), placo=player == "placo", walker=walker,
+                    teacher_prior=run is not None and run.distill.teacher_prior)  # a vision student's observations
 
 
 def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "native", threads: int | None = None,

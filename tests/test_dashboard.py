@@ -307,6 +307,38 @@ def test_dashboard_in_headless_chromium(recorded, tmp_path):
         proc.wait(timeout=30)
 
 
+@pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (CI installs it: .ci/install)")
+def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
+    """A vision soccer rollout shows the learner's head camera (what a vision student sees) in the Camera tab."""
+    playwright = pytest.importorskip("playwright.sync_api", reason="playwright is a dev dependency")
+    port = free_port()
+    command = [sys.executable, "-m", "legged.cli", "view", "--task", "soccer-1v1-vision", "--physics", "native",
+               "--steps", "10", "--port", str(port)]
+    proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    try:
+        Output(proc).wait_for("[view] dashboard at", 180)
+        with playwright.sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=[
+                "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox"])
+            page = browser.new_page(viewport={"width": 1024, "height": 700})
+            page.goto(f"http://127.0.0.1:{port}")
+            page.locator("canvas[data-engine]").wait_for(timeout=60_000)
+            page.get_by_role("tab", name="Camera").click()
+            page.get_by_text("camera observation recorded by the task").first.wait_for(timeout=60_000)
+            image = page.locator("img").last
+
+            def shown():  # the pitch, lines, ball and sky: not the blank placeholder
+                spread, colours = _canvas_stats(image.screenshot(path=str(tmp_path / "head_camera.png")))
+                return (spread, colours) if spread > 10 and colours >= 3 else None
+
+            _poll(shown, 60, "the head camera image")
+            browser.close()
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)
+
+
 def test_first_view_of_a_confined_world_is_inside_the_tunnel(recorded, confined_env):
     """A newcomer's first view shows the robot from inside its tunnel, under the ceiling, not the roof."""
     from web.app import Dashboard, DashboardConfig

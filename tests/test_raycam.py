@@ -42,7 +42,8 @@ _PRIMITIVES = """<mujoco><worldbody>
 
 @pytest.fixture(scope="module")
 def soccer():
-    model = build_soccer_scene(SoccerSceneConfig(players_per_team=1))
+    # Level cameras: at kick-off each looks straight at the other robot's head.
+    model = build_soccer_scene(SoccerSceneConfig(players_per_team=1, head_camera_tilt_deg=0.0))
     layout = SoccerLayout.from_model(model)
     camera = soccer_camera(model, layout=layout)
     return model, layout, camera, jax.jit(lambda poses: render(camera, poses))

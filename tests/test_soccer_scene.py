@@ -38,6 +38,8 @@ def test_config_rejects_bad_values():
         SoccerSceneConfig(wall_margin=0.2)
     with pytest.raises(ValueError, match="ball_radius"):
         SoccerSceneConfig(ball_radius=0.0)
+    with pytest.raises(ValueError, match="head_camera_tilt_deg"):
+        SoccerSceneConfig(head_camera_tilt_deg=90.0)
 
 
 def test_compiles_with_namespaced_robots(scene):
@@ -111,8 +113,10 @@ def test_kickoff_positions_face_the_opponent_goal(scene):
         assert pos[2] == pytest.approx(OP3.standing_height, abs=1e-6)
         forward = data.xmat[layout.torso_body[a]].reshape(3, 3)[:, 0]
         assert forward @ [attack, 0.0, 0.0] > 0.999
-        cam_axis = -data.cam_xmat[layout.head_camera[a]].reshape(3, 3)[:, 2]  # cameras look along -z
-        assert cam_axis @ [attack, 0.0, 0.0] > 0.999
+        cam = data.cam_xmat[layout.head_camera[a]].reshape(3, 3)  # cameras look along -z, image right is +x
+        tilt = np.deg2rad(config.head_camera_tilt_deg)  # toward the opponent goal, looking down
+        np.testing.assert_allclose(-cam[:, 2], [attack * np.cos(tilt), 0.0, -np.sin(tilt)], atol=1e-6)
+        np.testing.assert_allclose(cam[:, 0], [0.0, -attack, 0.0], atol=1e-6)  # the robot's right
         assert data.qpos[layout.joint_qpos_adr[a]] == pytest.approx(OP3.default_pose)
         assert data.ctrl[layout.actuator_ids[a]] == pytest.approx(OP3.default_pose)
     ball = data.qpos[layout.ball_qpos_adr: layout.ball_qpos_adr + 3]

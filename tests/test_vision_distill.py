@@ -110,7 +110,8 @@ def test_a_teacher_that_corrected_the_placo_command_teaches_the_whole_command(tm
     corrector = cls(obs, {"teacher": ["features"]}, "teacher", 3, **kwargs)
     plain = MLPModel(obs, {"teacher": ["features"]}, "teacher", 3, **kwargs)
     plain.load_state_dict(corrector.state_dict())
-    torch.testing.assert_close(corrector(obs), plain(obs) + obs["command_prior"])
+    torch.testing.assert_close(corrector(obs), (plain(obs) + obs["command_prior"]).clamp(-1.0, 1.0))
+    assert (plain(obs) + obs["command_prior"]).abs().max() > 1.0  # the clip was exercised
     corrector(obs, stochastic_output=True)
     plain(obs, stochastic_output=True)
     torch.testing.assert_close(corrector.output_mean, plain.output_mean + obs["command_prior"])
@@ -123,3 +124,8 @@ def test_a_teacher_that_corrected_the_placo_command_teaches_the_whole_command(tm
     student, scfg = load_policy(tmp_path / "student")
     assert scfg.command_prior == "" and scfg.distill.teacher_prior and scfg.walker == walker
     assert student.inputs == ("state", "camera") and student.num_actions == 3
+    from policies.drill import run_drill  # the student does the empty-goal drill through its own camera
+
+    report = run_drill("empty-goal", str(tmp_path / "student"), episodes=1, seed=0, threads=1, progress=False,
+                       num_envs=1)
+    assert report["episodes"] == 1 and report["goal_rate"] in (0.0, 1.0)

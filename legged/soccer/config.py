@@ -74,6 +74,10 @@ class SoccerSceneConfig:
     """Colour of the goal nets (opaque, so both renderers agree on what lies behind them), RGBA."""
     floor_margin: float = 1.0
     """The finite floor plane reaches this far beyond the walls, metres (beyond it: sky)."""
+    head_camera_tilt_deg: float = 30.0
+    """How far below the horizontal every head camera looks, degrees (the MJCF's camera looks level, so that a
+    standing robot sees the ground only beyond 1.1 m and never the ball at its feet; a real OP3 tilts its head to
+    watch the ball). Modelled as the camera's mount: the head's joints stay where the walking skill holds them."""
     camera_znear: float = 0.02
     """Near clipping distance of every camera, metres (hides the inside of the robot's own head)."""
     camera_zfar: float = 30.0
@@ -86,6 +90,8 @@ class SoccerSceneConfig:
                      "goal_height", "goal_depth", "post_width", "net_thickness", "ball_radius", "ball_mass"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
+        if not -90.0 < self.head_camera_tilt_deg < 90.0:
+            raise ValueError(f"head_camera_tilt_deg must be between -90 and 90, got {self.head_camera_tilt_deg!r}")
         if self.circle_segments < 8:
             raise ValueError(f"circle_segments must be at least 8, got {self.circle_segments!r}")
         if self.wall_margin <= self.goal_depth + self.net_thickness:

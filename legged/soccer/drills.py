@@ -81,12 +81,12 @@ class DrillEnv(LearnerView):
     """One OP3 on the pitch doing a drill (see the module docstring); the other robot stands off the pitch."""
 
     def __init__(self, drill: DrillConfig, config: SoccerConfig = SoccerConfig(), placo: bool = False,
-                 walker: Walker | None = None):
+                 walker: Walker | None = None, teacher_prior: bool = False):
         getup = drill.name == "getup"
         config = dataclasses.replace(config, end_on_fall="never" if getup else "agent0",
                                      end_on_goal=drill.name == "empty-goal",
                                      episode_seconds=drill.getup_seconds if getup else 20.0)
-        super().__init__(SoccerEnv(config), walker=walker)
+        super().__init__(SoccerEnv(config), walker=walker, teacher_prior=teacher_prior)
         if self.game.n_agents != 2:
             raise ValueError(f"drills play on the 1v1 scene (2 robots), got {self.game.n_agents}")
         self.drill, self.placo = drill, placo

@@ -103,6 +103,10 @@ def _add_robot(spec: mujoco.MjSpec, config: SoccerSceneConfig, team: int, player
         child.delete(key)
     for name in TEAM_COLOUR_GEOMS:
         child.geom(name).rgba = list(config.team_rgba(team))
+    if OP3.head_camera is not None:  # image right = the robot's right; image up tilted forward: looking down
+        tilt = np.deg2rad(config.head_camera_tilt_deg)
+        camera = child.camera(OP3.head_camera)
+        camera.alt.xyaxes = [0.0, -1.0, 0.0, float(np.sin(tilt)), 0.0, float(np.cos(tilt))]
     root = child.body(OP3.root_body)
     root.pos = [0.0, 0.0, _QPOS0_HEIGHT]
     x, y, yaw = (float(v) for v in pose)
