@@ -117,16 +117,16 @@ def ppo_train_cfg(config: TrainConfig, camera: bool = False, multi_gpu: dict | N
 class PriorCorrector(MLPModel):
     """The actor of a state soccer player whose commands corrected the placo player's (command_prior=placo), as
     its vision student's teacher: its outputs, and its Gaussian's mean, are the whole command, its corrections
-    added to the observation `command_prior` (the student's game gives it; legged.soccer.learner). Its
-    deterministic output, a DAgger label, is clipped to the walker's command range [-1, 1], as the walker
-    clips it (`Walker.command`): beyond the range every command walks the same."""
+    added to the observation `command_prior` (the student's game gives it; legged.soccer.learner). The mean is
+    clipped to the walker's command range [-1, 1], as the walker clips commands (`Walker.command`): beyond it
+    every command walks the same, so neither DAgger's labels nor the KL to the teacher should weigh the excess."""
 
     def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False):
-        mean = self.mlp(self.get_latent(obs, masks, hidden_state)) + obs["command_prior"]
+        mean = (self.mlp(self.get_latent(obs, masks, hidden_state)) + obs["command_prior"]).clamp(-1.0, 1.0)
         if stochastic_output:
             self.distribution.update(mean)
             return self.distribution.sample()
-        return self.distribution.deterministic_output(mean).clamp(-1.0, 1.0)
+        return self.distribution.deterministic_output(mean)
 
 
 def teacher_model(teacher: TrainConfig) -> dict:
