@@ -328,7 +328,7 @@ def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
             page.get_by_text("camera observation recorded by the task").first.wait_for(timeout=60_000)
             image = page.locator("img").last
 
-            def shown():  # grass, lines and the other robot: not the blank (black) placeholder
+            def shown():  # grass, lines and the other robot, not the all-black image shown before one arrives
                 spread, colours = _canvas_stats(image.screenshot(path=str(tmp_path / "head_camera.png")))
                 return (spread, colours) if spread > 10 and colours >= 3 else None
 
