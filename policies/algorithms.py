@@ -12,6 +12,9 @@ read, which model classes it builds, and which loss it adds.
 | rma        | teacher's head on (state, enc(history))     | the teacher's actor          | z regression (policies.distill) |
 | kl         | CNN + MLP on (state, camera)                | MLP on privileged_state      | PPO + KL to a state teacher (policies.teacher_kl) |
 
+A dagger vision student with `distill.student_memory` has a GRU between its features and its head
+(policies.memory_models).
+
 Vision students (dagger and kl on soccer-1v1-vision) read (state, camera), and their teacher, a state soccer
 player, reads `features`.
 
@@ -24,7 +27,7 @@ import contextlib
 import io
 
 import torch
-from rsl_rl.algorithms import PPO, Distillation
+from rsl_rl.algorithms import PPO
 from rsl_rl.models import MLPModel
 from tensordict import TensorDict
 
@@ -73,6 +76,10 @@ def actor_model(config: TrainConfig, std: float, camera: bool = False) -> dict:
     """rsl-rl model config of the actor of `config.algo` (dagger: of its student)."""
     ppo, lat, algo = config.ppo, config.latent, config.algo
     base = _mlp(ppo.actor_hidden, ppo.activation, ppo.obs_normalization, std, camera)
+    if camera and algo == "dagger" and config.distill.student_memory:
+        from policies.memory_models import MemoryCNNModel
+
+        base.update(class_name=MemoryCNNModel, memory_dim=config.distill.student_memory)
     if algo in ("teacher",) + HISTORY_ALGOS and not camera:
         base.update(_latent(lat), gaussian=algo in ("hib", "hib-no-ib"),
                     privileged_embedding=lat.projection_dim if algo in ("hib", "hib-no-ib") else 0)
@@ -141,7 +148,7 @@ def teacher_model(teacher: TrainConfig) -> dict:
 def distill_train_cfg(config: TrainConfig, teacher: TrainConfig, multi_gpu: dict | None = None,
                       camera: bool = False) -> dict:
     """rsl-rl's train_cfg of a distillation (dagger, rma) from the `teacher` run's config."""
-    from policies.distill import LatentRegression
+    from policies.distill import LatentRegression, MixedDAgger
 
     d = config.distill
     student = actor_model(config, d.student_noise_std, camera)
@@ -149,9 +156,11 @@ def distill_train_cfg(config: TrainConfig, teacher: TrainConfig, multi_gpu: dict
         student.update(hidden_dims=list(teacher.ppo.actor_hidden), activation=teacher.ppo.activation,
                        latent_dim=teacher.latent.latent_dim)
     return {
-        "algorithm": {"class_name": LatentRegression if config.algo == "rma" else Distillation,
+        "algorithm": {"class_name": LatentRegression if config.algo == "rma" else MixedDAgger,
                       "learning_rate": d.learning_rate, "num_learning_epochs": d.num_learning_epochs,
-                      "gradient_length": d.gradient_length, "max_grad_norm": config.ppo.max_grad_norm},
+                      "gradient_length": d.gradient_length, "max_grad_norm": config.ppo.max_grad_norm,
+                      **({} if config.algo == "rma" else {"teacher_act_fraction": d.teacher_act_fraction,
+                                                          "teacher_act_iterations": d.teacher_act_iterations})},
         "student": student,
         "teacher": teacher_model(teacher),
         "obs_groups": {"student": actor_inputs(config.algo, camera), "teacher": teacher_inputs(teacher)},

@@ -127,6 +127,14 @@ class DistillConfig:
     """kl: initial weight of KL(teacher || student) added to the student's PPO loss (policies.teacher_kl)."""
     kl_decay: float = 0.995
     """kl: factor applied to that weight after every iteration."""
+    student_memory: int = 0
+    """dagger vision students: size of a GRU memory between features and head (0: none; policies.memory_models)."""
+    student_init: str = ""
+    """dagger vision students: an earlier vision student run whose camera encoder and normaliser this one starts from."""
+    teacher_act_fraction: float = 0.0
+    """dagger: share of the environments the teacher acts in at first (DAgger's beta; the student learns on all)."""
+    teacher_act_iterations: int = 0
+    """dagger: iterations over which `teacher_act_fraction` falls linearly to 0 (0: it stays)."""
     teacher_prior: bool = False
     """Set by `legged distill`: the teacher (a state soccer player, command_prior=placo) corrected the placo
     player's command, which its vision student's game then gives as the observation `command_prior`."""
@@ -259,13 +267,19 @@ def _check_algo(cfg: TrainConfig, entry) -> TrainConfig:
     """ConfigError for an algorithm the run cannot use; the config with the env's history length set."""
     if cfg.algo not in ALGOS:
         raise ConfigError(f"algo must be one of {', '.join(ALGOS)}, got {cfg.algo!r}")
+    d, vision_soccer = cfg.distill, entry.kind == "soccer" and entry.vision and cfg.backend == "rsl"
+    if (d.student_memory or d.student_init) and not (cfg.algo == "dagger" and vision_soccer):
+        raise ConfigError(f"distill.student_memory and distill.student_init are for dagger vision students (legged "
+                          f"distill ... --task soccer-1v1-vision --method dagger), not --algo {cfg.algo} on {cfg.task}")
+    if d.teacher_act_fraction and cfg.algo != "dagger":
+        raise ConfigError(f"distill.teacher_act_fraction (DAgger's beta) is for --method dagger, not {cfg.algo}")
     if cfg.algo == "ppo":
         return cfg
     if cfg.init_from:
         raise ConfigError(f"init_from (a warm start) works with --algo ppo only, not {cfg.algo}")
     if cfg.algo in DISTILL_ALGOS and not cfg.distill.teacher:
         raise ConfigError(f"--algo {cfg.algo} distils a teacher: use `legged distill TEACHER_RUN --method {cfg.algo}`")
-    if cfg.algo in ("dagger", "kl") and entry.kind == "soccer" and entry.vision and cfg.backend == "rsl":
+    if cfg.algo in ("dagger", "kl") and vision_soccer:
         _check_distill(cfg.distill)  # a camera student of a state soccer player (policies.distill)
         return cfg
     if cfg.algo == "kl":
@@ -294,9 +308,11 @@ def _check_algo(cfg: TrainConfig, entry) -> TrainConfig:
 def _check_distill(d: DistillConfig) -> None:
     """ConfigError naming the distillation settings outside their ranges."""
     if not (0 < d.learning_rate <= 1 and d.num_learning_epochs >= 1 and d.gradient_length >= 1
-            and 0 < d.student_noise_std <= 10 and 0 <= d.kl_weight <= 1e3 and 0 < d.kl_decay <= 1):
+            and 0 < d.student_noise_std <= 10 and 0 <= d.kl_weight <= 1e3 and 0 < d.kl_decay <= 1
+            and 0 <= d.student_memory <= 4096 and 0 <= d.teacher_act_fraction <= 1 and d.teacher_act_iterations >= 0):
         raise ConfigError(f"distill: learning_rate in (0, 1], num_learning_epochs and gradient_length >= 1, "
-                          f"student_noise_std in (0, 10], kl_weight in [0, 1000], kl_decay in (0, 1]; got {d}")
+                          f"student_noise_std in (0, 10], kl_weight in [0, 1000], kl_decay in (0, 1], student_memory "
+                          f"in [0, 4096], teacher_act_fraction in [0, 1], teacher_act_iterations >= 0; got {d}")
 
 
 def _check_ppo(ppo: PPOConfig) -> None:

@@ -31,9 +31,37 @@ from rsl_rl.algorithms import Distillation
 
 from policies.config import ConfigError, TrainConfig, apply_overrides, to_dict
 from policies.run_dir import RunDir, RunDirError
+from policies.warm_start import ADAPT_SAMPLES
 
 METHODS = ("dagger", "rma", "kl")
 """Distillation methods."""
+
+
+def teacher_share(fraction: float, iterations: int, done: int) -> float:
+    """DAgger's beta after `done` iterations: `fraction`, falling linearly to 0 over `iterations` (0: constant)."""
+    if not iterations:
+        return fraction
+    return fraction * max(0.0, 1.0 - done / iterations)
+
+
+class MixedDAgger(Distillation):
+    """rsl-rl's Distillation (DAgger: the student acts, the teacher labels every step) in which, at first, the
+    teacher acts in a share of the environments (DAgger's beta, Ross et al. 2011): `teacher_act_fraction` of
+    them, falling linearly to none over `teacher_act_iterations` (0: the share stays). The student learns on
+    every step either way; the teacher's share shows it the states of a game played well."""
+
+    def __init__(self, *args, teacher_act_fraction: float = 0.0, teacher_act_iterations: int = 0, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.teacher_act_fraction, self.teacher_act_iterations = teacher_act_fraction, teacher_act_iterations
+
+    def act(self, obs):
+        actions = super().act(obs)
+        share = teacher_share(self.teacher_act_fraction, self.teacher_act_iterations, self.num_updates)
+        count = round(share * len(actions))
+        if count:
+            actions = actions.clone()
+            actions[:count] = self.transition.privileged_actions[:count]
+        return actions
 
 
 class LatentRegression(Distillation):
@@ -130,6 +158,8 @@ def load_teacher(config: TrainConfig, env) -> tuple[TrainConfig, dict]:
 def start_student(alg, config: TrainConfig, teacher: TrainConfig, payload: dict) -> None:
     """Load the teacher's actor into a new distillation; rma also takes the teacher's head and normaliser."""
     alg.load(payload["alg"], {"teacher": True}, strict=True)
+    if config.distill.student_init:
+        load_student_encoder(alg.student, Path(config.distill.student_init))
     if config.algo != "rma":
         return
     student, source = alg.student, alg.teacher
@@ -141,6 +171,44 @@ def start_student(alg, config: TrainConfig, teacher: TrainConfig, payload: dict)
         student.obs_normalization = False  # frozen: the head expects the teacher's scaling
     for p in list(student.mlp.parameters()) + list(student.distribution.parameters()):
         p.requires_grad_(False)
+
+
+def check_student_init(run_path: Path) -> None:
+    """RunDirError unless `run_path` (`distill.student_init`) is a dagger vision student with a checkpoint."""
+    run = RunDir(run_path)
+    source = run.load_config()  # RunDirError naming the path if it is not a run
+    if source.algo != "dagger" or not getattr(source.env, "vision", False) or not run.checkpoints():
+        raise RunDirError(f"distill.student_init {run_path}: not a dagger vision student with a checkpoint (it "
+                          f"trained {source.task} with --algo {source.algo})")
+
+
+def load_student_encoder(student: torch.nn.Module, run_path: Path) -> None:
+    """Start `student` with the camera encoder (`cnns.*`) and state normaliser (`obs_normalizer.*`) of the vision
+    student run `run_path` (`distill.student_init`); a state that grew at its end (e.g. `env.vision_heading`)
+    takes the normaliser's statistics of the entries both have, with its sample count capped so that the new
+    entries' statistics follow the data within a few iterations. RunDirError naming what does not fit."""
+    from policies.rsl_backend import load_checkpoint
+
+    check_student_init(run_path)
+    source = load_checkpoint(RunDir(run_path).latest_checkpoint())["alg"]["student_state_dict"]
+    mine = dict(student.state_dict())
+    taken, wrong, grown = {}, [], False
+    for key, value in source.items():
+        if not key.startswith(("cnns.", "obs_normalizer.")) or key not in mine:
+            continue
+        if value.shape == mine[key].shape:
+            taken[key] = value
+        elif key.startswith("obs_normalizer.") and value.dim() == 2 and value.shape[1] < mine[key].shape[1]:
+            taken[key] = torch.cat([value, mine[key][:, value.shape[1]:]], dim=1)  # the new entries as they are
+            grown = True
+        else:
+            wrong.append(key)
+    if not any(k.startswith("cnns.") for k in taken) or wrong:
+        raise RunDirError(f"distill.student_init {run_path}: its camera encoder and normaliser do not fit this student "
+                          f"({'shapes differ: ' + ', '.join(wrong) if wrong else 'no camera encoder'})")
+    if grown and "obs_normalizer.count" in taken:  # the new entries' statistics must be able to move
+        taken["obs_normalizer.count"] = torch.clamp(taken["obs_normalizer.count"], max=ADAPT_SAMPLES)
+    student.load_state_dict({**mine, **taken}, strict=True)
 
 
 def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps: int | None = None,
@@ -167,6 +235,8 @@ def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps:
     if method == "rma" and (config.ppo.actor_hidden, config.latent.latent_dim) != \
             (teacher.ppo.actor_hidden, teacher.latent.latent_dim):
         raise ConfigError("rma reuses the teacher's head: ppo.actor_hidden and latent.latent_dim must be the teacher's")
+    if config.distill.student_init:
+        check_student_init(Path(config.distill.student_init))
     run = RunDir(run_dir or Path("runs") / f"{teacher.task}-{method}-{time.strftime('%Y%m%d-%H%M%S')}")
     run.create(config)
     (run.path / "teacher.yaml").write_text(yaml.safe_dump(to_dict(teacher), sort_keys=False))  # a record

@@ -30,6 +30,9 @@ class BuiltInPlayer:
         state = obs["state"] if isinstance(obs, dict) else obs
         return np.zeros((len(state), self.action_size), np.float32)
 
+    def reset(self, done=None) -> None:
+        """Nothing to forget."""
+
 
 def check_player(spec: str, drill: DrillConfig) -> None:
     """ValueError (or RunDirError) naming why `--player spec` cannot do `drill`, before anything is built."""
@@ -91,7 +94,7 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
 
         walker = load_walker(run.walker, run.getup, run.command_prior)
     game = SoccerConfig() if run is None else dataclasses.replace(  # a vision player sees through its own camera
-        SoccerConfig(), vision=run.env.vision, camera=run.env.camera)
+        SoccerConfig(), vision=run.env.vision, camera=run.env.camera, vision_heading=run.env.vision_heading)
     return DrillEnv(drill, with_randomization(game), placo=player == "placo", walker=walker,
                     teacher_prior=run is not None and run.distill.teacher_prior)  # a vision student's observations
 

@@ -143,6 +143,7 @@ def evaluate(env, policy, episodes: int, seed: int, physics: str = "mjx", num_en
     for first in range(0, episodes, num_envs):
         carry = one_tile_each(first, num_envs, env.terrain.num_tiles) if per_world else None
         batch = vector.reset(jax.random.fold_in(jax.random.PRNGKey(seed), first), carry)
+        policy.reset()
         obs, pending = batch.state.obs, np.ones(num_envs, bool)
         pending[episodes - first:] = False  # the last round may need fewer environments
         chunk: dict[int, dict] = {}
@@ -158,6 +159,7 @@ def evaluate(env, policy, episodes: int, seed: int, physics: str = "mjx", num_en
                                         *env_args)
             obs = result.obs
             ended = np.asarray(result.done) & pending
+            policy.reset(np.asarray(result.done))
             if ended.any():
                 stats = {k: np.asarray(v) for k, v in result.finished.items()}
                 for i in np.flatnonzero(ended):

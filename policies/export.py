@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -59,18 +60,30 @@ def export_onnx(policy: Policy, path: str | Path, samples: int = 64, seed: int =
     names = ["obs" if g == "state" else g for g in policy.inputs]
     shape = lambda g: (policy.obs_sizes[g],) if isinstance(policy.obs_sizes[g], int) else tuple(policy.obs_sizes[g])
     dummy = tuple(torch.zeros(1, *shape(g)) for g in policy.inputs)
-    torch.onnx.export(module, dummy, str(tmp), input_names=names, output_names=["actions"],
-                      dynamic_axes={**{n: {0: "batch"} for n in names}, "actions": {0: "batch"}},
-                      opset_version=18, dynamo=False)
+    recurrent = getattr(module, "is_recurrent", False)  # memory in, memory out (policies.memory_models)
+    inputs, outputs = names + (["memory"] if recurrent else []), ["actions"] + (["memory_out"] if recurrent else [])
+    if recurrent:
+        dummy = dummy + (module.initial_memory(1),)
+    axes = {n: {0: "batch"} for n in names} | {"actions": {0: "batch"}} | \
+        ({"memory": {1: "batch"}, "memory_out": {1: "batch"}} if recurrent else {})
+    with warnings.catch_warnings():  # the GRU's batch warning: its initial memory is an input, as it asks
+        warnings.filterwarnings("ignore", message="Exporting a model to ONNX with a batch_size other than 1")
+        torch.onnx.export(module, dummy, str(tmp), input_names=inputs, output_names=outputs, dynamic_axes=axes,
+                          opset_version=18, dynamo=False)
     rng = np.random.default_rng(seed)
     draw = lambda g: (rng.random((samples, *shape(g)), dtype=np.float32) if len(shape(g)) > 1 else
                       rng.normal(size=(samples, *shape(g))).astype(np.float32))  # images in [0, 1]
-    groups = {g: draw(g) for g in policy.inputs}
-    feeds = {n: groups[g] for n, g in zip(names, policy.inputs)}
     try:
         session = onnxruntime.InferenceSession(str(tmp), providers=["CPUExecutionProvider"])
-        onnx_actions = session.run(["actions"], feeds)[0]
-        gap = float(np.abs(onnx_actions - policy.act(groups)).max())
+        policy.reset()
+        memory, gap = (module.initial_memory(samples).numpy() if recurrent else None), 0.0
+        for _ in range(3 if recurrent else 1):  # a model with memory: three steps, its memory carried
+            groups = {g: draw(g) for g in policy.inputs}
+            feeds = {n: groups[g] for n, g in zip(names, policy.inputs)} | ({"memory": memory} if recurrent else {})
+            result = session.run(outputs, feeds)
+            memory = result[-1] if recurrent else None
+            gap = max(gap, float(np.abs(result[0] - policy.act(groups)).max()))
+        policy.reset()
         if not gap <= PARITY_ATOL:
             raise ValueError(f"ONNX export of {policy.checkpoint} differs from the policy by {gap:.2e} "
                              f"(allowed {PARITY_ATOL:.0e}); {path} was left as it was")
@@ -78,5 +91,5 @@ def export_onnx(policy: Policy, path: str | Path, samples: int = 64, seed: int =
     finally:
         tmp.unlink(missing_ok=True)
     return {"onnx": str(path), "checkpoint": str(policy.checkpoint), "backend": policy.backend,
-            "obs_size": policy.obs_size, "inputs": names, "num_actions": policy.num_actions, "max_abs_diff": gap,
-            "samples": samples}
+            "obs_size": policy.obs_size, "inputs": inputs, "outputs": outputs, "num_actions": policy.num_actions,
+            "max_abs_diff": gap, "samples": samples}

@@ -119,6 +119,7 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
         raise NavigationError(str(exc)) from None
     vector = VectorEnv(env, 1, physics, threads)
     batch = vector.reset(jax.random.PRNGKey(seed), level_carry(np.zeros(1), 0))
+    policy.reset()
     if on_step is not None:
         on_step(env, batch.state, plan)
     obs, replans, failed_replans, walked = batch.state.obs, 0, 0, 0.0

@@ -42,11 +42,21 @@ class Policy:
     """Observation groups the actor reads, in its input order (e.g. state and history for students)."""
     features: Callable[[dict], np.ndarray | None] | None = None
     """rsl: what a linear probe reads from the actor (mean latent, or an MLP's last hidden layer)."""
+    reset: Callable[..., None] = lambda done=None: None
+    """Starts new episodes for a policy with memory: `reset()` all of them (a new batch), `reset(done)` those
+    where the boolean array `done` is set; nothing for memoryless policies. Call it whenever episodes begin."""
+    recurrent: bool = False
+    """Whether `act` remembers earlier steps (policies.memory_models): then one batch of episodes at a time."""
 
     @property
     def obs_size(self) -> int:
         """Size of the actor's observation (`state`)."""
         return self.obs_sizes["state"]
+
+
+def _tensor(x) -> torch.Tensor:
+    """A float32 torch tensor of a writable copy of `x` (JAX buffers are read-only)."""
+    return torch.from_numpy(np.array(x, np.float32))
 
 
 def build_actor(config: TrainConfig, obs_sizes: dict, num_actions: int):
@@ -74,21 +84,48 @@ def _rsl_policy(config: TrainConfig, path: Path) -> Policy:
     module = deployed_actor(actor)
     inputs = tuple(actor_inputs(config.algo, "camera" in payload["obs_sizes"]))
 
+    if getattr(module, "is_recurrent", False):
+        return _recurrent_policy(module, payload, path, inputs)
+
     def act(obs) -> np.ndarray:
-        tensor = lambda x: torch.from_numpy(np.array(x, np.float32))  # a writable copy of the JAX buffer
         with torch.inference_mode():
             if isinstance(obs, dict):  # the observation groups the actor reads, in its order
-                return module(*(tensor(obs[k]) for k in inputs)).numpy()
-            return module(tensor(obs)).numpy()
+                return module(*(_tensor(obs[k]) for k in inputs)).numpy()
+            return module(_tensor(obs)).numpy()
 
     def features(obs: dict) -> np.ndarray | None:
         with torch.inference_mode():
-            out = deployed_features(module, *(torch.from_numpy(np.array(obs[k], np.float32)) for k in inputs))
+            out = deployed_features(module, *(_tensor(obs[k]) for k in inputs))
         return None if out is None else out.numpy()
 
     return Policy(act=act, backend="rsl", step=payload["step"], obs_sizes=payload["obs_sizes"],
                   num_actions=payload["num_actions"], checkpoint=path, torch_module=module, inputs=inputs,
                   features=features)
+
+
+def _recurrent_policy(module, payload: dict, path: Path, inputs: tuple[str, ...]) -> Policy:
+    """A Policy over a deployed actor with memory ((inputs..., memory) -> (actions, memory)): `act` carries the
+    memory of the batch from step to step, `reset` clears it."""
+    memory: list = [None]
+
+    def act(obs: dict) -> np.ndarray:
+        groups = [_tensor(obs[k]) for k in inputs]
+        with torch.inference_mode():
+            if memory[0] is None or memory[0].shape[1] != len(groups[0]):  # a new batch
+                memory[0] = module.initial_memory(len(groups[0]))
+            actions, memory[0] = module(*groups, memory[0])
+        return actions.numpy()
+
+    def reset(done=None) -> None:
+        if done is None or memory[0] is None:
+            memory[0] = None
+            return
+        with torch.inference_mode():
+            memory[0][:, torch.from_numpy(np.asarray(done, bool))] = 0.0
+
+    return Policy(act=act, backend="rsl", step=payload["step"], obs_sizes=payload["obs_sizes"],
+                  num_actions=payload["num_actions"], checkpoint=path, torch_module=module, inputs=inputs,
+                  features=lambda obs: None, reset=reset, recurrent=True)
 
 
 def _brax_policy(config: TrainConfig, path: Path) -> Policy:

@@ -13,7 +13,7 @@ from pathlib import Path
 import jax
 import numpy as np
 import torch
-from rsl_rl.algorithms import PPO
+from rsl_rl.algorithms import PPO, Distillation
 from tensordict import TensorDict
 from tqdm import tqdm
 
@@ -134,6 +134,8 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         attach_teacher_kl(alg, config, *teacher, venv.get_observations(), iteration)
     if payload is not None:
         alg.load(payload["alg"], None, strict=True)
+        if isinstance(alg, Distillation):  # its schedule (policies.distill.MixedDAgger) goes on
+            alg.num_updates = iteration
         if launch.is_main:
             torch.set_rng_state(payload["torch_rng"])
     elif teacher is not None and config.algo != "kl":  # kl: a fresh student, pulled towards its teacher

@@ -140,6 +140,11 @@ def test_egocentric_observations_are_the_same_for_mirrored_players(game):
     assert np.allclose(features[0], features[1], atol=1e-5)
     assert np.allclose(features[0][:3], [1.0, 0.0, env.config.scene.ball_radius - env.robot.standing_height], atol=1e-5)
     assert np.allclose(features[0][6:10], [-1.5, 0.0, 3.5, 0.0], atol=1e-5)  # own goal behind, opponent's ahead
+    heading = np.asarray(observe.attack_direction(b, lay.team, env._goals))  # a vision player's, vision_heading
+    assert np.allclose(heading, [[1.0, 0.0], [1.0, 0.0]], atol=1e-5)  # both face the way they attack
+    quarter = b.rot.at[0].set(b.rot[0] @ jnp.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
+    turned = np.asarray(observe.attack_direction(dataclasses.replace(b, rot=quarter), lay.team, env._goals))
+    assert np.allclose(turned[0], [0.0, -1.0], atol=1e-5)  # turned 90 degrees left: the attack is to its right
 
 
 def test_others_come_teammates_first():
@@ -155,11 +160,13 @@ def test_the_named_layout_covers_the_observations_and_maps_1v1_onto_2v2():
     from policies.warm_start import element_names, input_map
 
     layouts = {}
-    for task in ("soccer-1v1", "soccer-2v2", "soccer-1v1-vision"):
-        env = LearnerView(make(task))
+    for task, extra in (("soccer-1v1", {}), ("soccer-2v2", {}), ("soccer-1v1-vision", {}),
+                        ("soccer-1v1-vision", {"vision_heading": True})):
+        env = LearnerView(make(task, **extra))
         layouts[task] = layout = env.observation_layout()
         dims = env.observation_dims()
         assert {k: sum(n for _, n in v) for k, v in layout.items()} == {k: dims[k] for k in layout}, task
+        assert (layout["state"][-1] == ("attack_direction", 2)) == bool(extra), task
     names = {t: element_names(layouts[t]["state"]) for t in ("soccer-1v1", "soccer-2v2")}
     mapping = input_map(names["soccer-1v1"], names["soccer-2v2"])
     for i, name in enumerate(names["soccer-2v2"]):
@@ -189,6 +196,8 @@ def test_soccer_config_is_checked():
 
     with pytest.raises(ValueError, match="end_on_fall must be"):
         SoccerConfig(end_on_fall="sometimes")
+    with pytest.raises(ValueError, match="vision_heading .* needs vision"):
+        SoccerConfig(vision_heading=True)
     with pytest.raises(ValueError, match="randomization.ball_mass must be a range"):
         SoccerConfig(randomization=dataclasses.replace(SoccerConfig().randomization, ball_mass=(0.3, 0.1)))
 

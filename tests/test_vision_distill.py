@@ -129,3 +129,76 @@ def test_a_teacher_that_corrected_the_placo_command_teaches_the_whole_command(tm
     report = run_drill("empty-goal", str(tmp_path / "student"), episodes=1, seed=0, threads=1, progress=False,
                        num_envs=1)
     assert report["episodes"] == 1 and report["goal_rate"] in (0.0, 1.0)
+
+
+def test_dagger_beta_falls_linearly_to_zero():
+    from policies.distill import teacher_share
+
+    assert [teacher_share(0.5, 4, k) for k in (0, 2, 4, 9)] == [0.5, 0.25, 0.0, 0.0]
+    assert teacher_share(0.3, 0, 100) == 0.3 and teacher_share(0.0, 10, 0) == 0.0
+
+
+def test_a_memory_student_starts_from_another_remembers_forgets_on_reset_and_exports(soccer_teacher, tmp_path, capsys):
+    from policies.distill import start_distill
+    from policies.export import export_onnx
+    from policies.policy_io import load_policy
+
+    memory = ["distill.student_memory=8", "distill.gradient_length=2"]
+    for method, extra, message in (("kl", memory, "for dagger vision students"),
+                                   ("kl", ["distill.teacher_act_fraction=0.5"], "DAgger's beta"),
+                                   ("dagger", ["distill.student_init=" + str(soccer_teacher)], "not a dagger vision")):
+        assert main(["distill", str(soccer_teacher), "--method", method, "--task", "soccer-1v1-vision", "--run-dir",
+                     str(tmp_path / method), *sum((["--set", o] for o in extra), [])]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
+    first = tmp_path / "first"  # a memoryless student whose camera encoder the memory student starts from
+    start_distill(str(soccer_teacher), "dagger", str(first), timesteps=16, progress=False, task="soccer-1v1-vision")
+    record = start_distill(str(soccer_teacher), "dagger", str(tmp_path / "memory"), timesteps=16, progress=False,
+                           task="soccer-1v1-vision", overrides=memory + [
+                               f"distill.student_init={first}", "distill.teacher_act_fraction=0.5",
+                               "env.vision_heading=true"])  # its state grows by the attacking direction
+    assert record["step"] == 16 and np.isfinite(record["loss_behavior"])
+    policy, cfg = load_policy(tmp_path / "memory")
+    assert policy.recurrent and cfg.distill.student_memory == 8 and cfg.env.vision_heading
+    assert policy.obs_sizes["state"] == load_policy(first)[0].obs_sizes["state"] + 2
+    rng = np.random.default_rng(0)
+    obs = {"state": rng.normal(size=(3, policy.obs_sizes["state"])).astype(np.float32),
+           "camera": rng.random((3, *policy.obs_sizes["camera"]), dtype=np.float32)}
+    first_step, second_step = policy.act(obs), policy.act(obs)
+    assert np.abs(first_step - second_step).max() > 1e-6  # the same observation, another memory
+    policy.reset(np.array([True, False, False]))
+    third_step = policy.act(obs)
+    np.testing.assert_allclose(third_step[0], first_step[0], atol=1e-6)  # episode 0 starts afresh
+    policy.reset()
+    np.testing.assert_allclose(policy.act(obs), first_step, atol=1e-6)
+    check = export_onnx(policy, tmp_path / "memory.onnx", samples=4)
+    assert check["inputs"] == ["obs", "camera", "memory"] and check["max_abs_diff"] <= 1e-4
+
+
+def test_the_deployed_memory_actor_computes_what_the_trained_model_does():
+    """Steps of MemoryCNNModel (as rsl-rl's Distillation runs it) against DeployedMemoryActor, with a reset of one
+    episode in between."""
+    from policies.algorithms import CAMERA_CNN
+    from policies.memory_models import MemoryCNNModel
+
+    torch.manual_seed(0)
+    n = 3
+    obs = TensorDict({"state": torch.randn(n, 5), "camera": torch.rand(n, 4, 30, 40)}, batch_size=[n])
+    model = MemoryCNNModel(obs, {"actor": ["state", "camera"]}, "actor", 2, memory_dim=6, hidden_dims=[8],
+                           obs_normalization=True, cnn_cfg=dict(CAMERA_CNN),
+                           distribution_cfg={"class_name": "GaussianDistribution", "init_std": 0.5})
+    model.update_normalization(obs)  # statistics that are not the identity
+    deployed = model.as_onnx().eval()
+    model.eval()
+    memory = deployed.initial_memory(n)
+    for step in range(4):
+        frame = TensorDict({"state": torch.randn(n, 5), "camera": torch.rand(n, 4, 30, 40)}, batch_size=[n])
+        with torch.no_grad():
+            expected = model(frame)
+            actions, memory = deployed(frame["state"], frame["camera"], memory)
+        torch.testing.assert_close(actions, expected)
+        if step == 1:  # episode 1 ends: both forget it
+            done = torch.tensor([0, 1, 0])
+            model.reset(done)
+            memory[:, done == 1] = 0.0
+    torch.testing.assert_close(memory, model.get_hidden_state())

@@ -99,6 +99,8 @@ class RolloutSource:
     def record(self, steps: int, seed: int, progress: Callable[[int, int], None] | None = None) -> Trajectory:
         """Roll out the current policy (or the default controller)."""
         act = None if self.policy is None else self.policy.act
+        if self.policy is not None:
+            self.policy.reset()  # a policy with memory starts the recorded episodes afresh
         info = {"policy": self.policy_name}
         if self.policy is not None:
             info.update(checkpoint=str(self.policy.checkpoint), trained_steps=int(self.policy.step))

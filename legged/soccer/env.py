@@ -196,6 +196,8 @@ class SoccerEnv(MjxEnv):
         game = observe.game_features(b, self._team, self._goals, self._others)
         clean = jnp.concatenate([proprio, game], -1)
         state = proprio if c.vision else clean
+        if c.vision_heading:
+            state = jnp.concatenate([proprio, observe.attack_direction(b, self._team, self._goals)], -1)
         if c.noise.enabled:
             n = c.noise
             scale = jnp.concatenate([jnp.full(3, n.gravity), jnp.zeros(3), jnp.full(self.action_size, n.joint_pos),
@@ -218,6 +220,8 @@ class SoccerEnv(MjxEnv):
         clean features, named `state/...`; in vision games `state` is the proprioception alone)."""
         features = observe.feature_layout(self.layout.players_per_team)
         state = features[:1] if self.config.vision else features
+        if self.config.vision_heading:
+            state = state + [("attack_direction", observe.HEADING_SIZE)]
         return {"state": state, "privileged_state": [(f"state/{n}", k) for n, k in features]
                 + [("truth", observe.PRIVILEGED_SIZE)]}
 

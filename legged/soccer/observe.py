@@ -97,6 +97,17 @@ def game_features(b: Bodies, team: np.ndarray, goals: np.ndarray, others: np.nda
     return jnp.concatenate([ball, ball_vel, own, opp, players], -1)
 
 
+def attack_direction(b: Bodies, team: np.ndarray, goals: np.ndarray) -> jnp.ndarray:
+    """[A, 2] unit vector from each agent's own goal towards the opponent goal, in its heading frame: the
+    (cos, sin) of the angle from the agent's torso heading to the direction it attacks in."""
+    goals = jnp.asarray(goals[:, :2], jnp.float32)
+    along = goals[1 - team] - goals[team]
+    return yaw_rotate(b.yaw, along / jnp.linalg.norm(along, axis=-1, keepdims=True))
+
+
+HEADING_SIZE = 2
+"""Length of `attack_direction` (vision players with `vision_heading`)."""
+
 PRIVILEGED_SIZE = 17
 """Length of `privileged_features`."""
 

@@ -69,6 +69,8 @@ class SoccerConfig(EnvConfig):
     """Give every agent its head camera image (observation 'camera') and a proprioceptive-only 'state'."""
     camera: RayCameraConfig = RayCameraConfig()
     """Size and appearance of the head camera images."""
+    vision_heading: bool = False
+    """With `vision`: 'state' also ends with the attacking direction in the agent's heading frame (an IMU's yaw)."""
     rewards: SoccerRewards = SoccerRewards()
     """Reward weights."""
     randomization: SoccerRandomization = SoccerRandomization()
@@ -82,5 +84,7 @@ class SoccerConfig(EnvConfig):
             raise ValueError(f"end_on_fall must be 'agent0', 'any' or 'never', got {self.end_on_fall!r}")
         if self.spawn_spread < 0 or self.restart_inset < 0:
             raise ValueError("spawn_spread and restart_inset must be non-negative")
+        if self.vision_heading and not self.vision:
+            raise ValueError("vision_heading adds the attacking direction to a vision player's state: it needs vision")
         if 2 * self.restart_inset >= min(self.scene.field_length, self.scene.field_width):
             raise ValueError(f"restart_inset {self.restart_inset} does not fit on the pitch")
