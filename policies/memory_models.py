@@ -35,8 +35,8 @@ class MemoryCNNModel(CNNModel):
 
     def get_latent(self, obs: TensorDict, masks=None, hidden_state=None) -> torch.Tensor:
         if masks is not None:
-            raise NotImplementedError("a memory student learns by distillation, step by step (not by PPO's "
-                                      "padded trajectories)")
+            raise ValueError("a memory student learns by distillation, step by step; PPO's padded trajectories "
+                             "(masks) are refused by the config (distill.student_memory is for --method dagger)")
         features = super().get_latent(obs)
         return torch.cat([self.rnn(features, None, hidden_state).squeeze(0), features], dim=-1)
 
@@ -59,7 +59,8 @@ class MemoryCNNModel(CNNModel):
         return DeployedMemoryActor(self)
 
     def as_jit(self) -> torch.nn.Module:
-        raise NotImplementedError("a memory actor deploys as DeployedMemoryActor (as_onnx), whose memory is an input")
+        raise ValueError("a memory actor has no TorchScript export: use `legged export --onnx` (DeployedMemoryActor, "
+                         "whose memory is an input and an output)")
 
 
 class DeployedMemoryActor(torch.nn.Module):
