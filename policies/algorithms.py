@@ -136,11 +136,31 @@ class PriorCorrector(MLPModel):
         return self.distribution.deterministic_output(mean)
 
 
-def teacher_model(teacher: TrainConfig) -> dict:
-    """rsl-rl model config of a distillation's teacher: the `teacher` run's actor (a PriorCorrector for a state
-    player with command_prior)."""
+class WorldLabeller(MLPModel):
+    """The actor of a state soccer player whose commands corrected the placo player's (command_prior=placo), as
+    the teacher of a vision student that adds the placo command to its own from its estimate of the game
+    (legged.soccer.learner, `estimates_world`): its labels are [its corrections (`corrections`), the game
+    features after the proprioception that it read (`features`)], the student's actions."""
+
+    def __init__(self, obs: TensorDict, obs_groups: dict, obs_set: str, output_dim: int, corrections: int = 3,
+                 **kwargs):
+        super().__init__(obs, obs_groups, obs_set, corrections, **kwargs)
+        self.world_size = output_dim - corrections
+
+    def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False):
+        corrections = super().forward(obs, masks, hidden_state, stochastic_output)
+        return torch.cat([corrections, obs["features"][:, -self.world_size:]], dim=-1)
+
+
+def teacher_model(teacher: TrainConfig, student: TrainConfig | None = None) -> dict:
+    """rsl-rl model config of a distillation's teacher: the `teacher` run's actor (for a state player with
+    command_prior: a PriorCorrector, or a WorldLabeller when its `student` estimates the world)."""
+    from legged.soccer.walker import COMMAND_SIZE
+
     cfg = actor_model(teacher, teacher.ppo.init_noise_std)
-    if teacher.command_prior:
+    if teacher.command_prior and student is not None and student.estimates_world:
+        cfg.update(class_name=WorldLabeller, corrections=COMMAND_SIZE)
+    elif teacher.command_prior:
         cfg["class_name"] = PriorCorrector
     return cfg
 
@@ -162,7 +182,7 @@ def distill_train_cfg(config: TrainConfig, teacher: TrainConfig, multi_gpu: dict
                       **({} if config.algo == "rma" else {"teacher_act_fraction": d.teacher_act_fraction,
                                                           "teacher_act_iterations": d.teacher_act_iterations})},
         "student": student,
-        "teacher": teacher_model(teacher),
+        "teacher": teacher_model(teacher, config),
         "obs_groups": {"student": actor_inputs(config.algo, camera), "teacher": teacher_inputs(teacher)},
         "num_steps_per_env": config.ppo.num_steps_per_env,
         "multi_gpu": multi_gpu,

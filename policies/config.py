@@ -137,7 +137,8 @@ class DistillConfig:
     """dagger: iterations over which `teacher_act_fraction` falls linearly to 0 (0: it stays)."""
     teacher_prior: bool = False
     """Set by `legged distill`: the teacher (a state soccer player, command_prior=placo) corrected the placo
-    player's command, which its vision student's game then gives as the observation `command_prior`."""
+    player's command, which its vision student's game then gives as the observation `command_prior` (unless the
+    student has command_prior=placo itself and estimates the game: TrainConfig.estimates_world)."""
 
 
 ALGOS = ("ppo", "teacher", "hib", "hib-no-ib", "history", "dagger", "rma", "kl")
@@ -196,6 +197,12 @@ class TrainConfig:
     """Soccer tasks with a walker: how a fallen robot gets up, `script` (ROBOTIS' scripted get-up) or the run
     directory of an op3-getup policy (needs env.end_on_fall=never, so that a fall does not end the game, and
     env.scene.limb_floor_contacts=true, as in its training). '' : fallen robots stay down."""
+
+    @property
+    def estimates_world(self) -> bool:
+        """Whether this vision soccer player adds the placo command (command_prior) to its own, computed from its
+        estimate of the game features, which its actions then hold (legged.soccer.learner)."""
+        return bool(self.command_prior) and bool(getattr(self.env, "vision", False))
 
     @property
     def self_play(self) -> bool:
@@ -271,6 +278,10 @@ def _check_algo(cfg: TrainConfig, entry) -> TrainConfig:
     if (d.student_memory or d.student_init) and not (cfg.algo == "dagger" and vision_soccer):
         raise ConfigError(f"distill.student_memory and distill.student_init are for dagger vision students (legged "
                           f"distill ... --task soccer-1v1-vision --method dagger), not --algo {cfg.algo} on {cfg.task}")
+    if cfg.estimates_world and cfg.algo != "dagger":
+        raise ConfigError(f"command_prior=placo on a vision task makes the player estimate the ball, goals and "
+                          f"opponent as actions, which only a dagger student learns (legged distill ... --method "
+                          f"dagger), not --algo {cfg.algo}")
     if d.teacher_act_fraction and cfg.algo != "dagger":
         raise ConfigError(f"distill.teacher_act_fraction (DAgger's beta) is for --method dagger, not {cfg.algo}")
     if cfg.algo == "ppo":

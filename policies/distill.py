@@ -15,7 +15,11 @@ Two kinds of teacher:
   policies.teacher_kl). A teacher that commands a walker (`walker`) passes it on: the student commands it too.
   A teacher whose commands corrected the placo player's (`command_prior`) is taught whole: its student's game
   observes that command (`command_prior`), the teacher's outputs add it (policies.algorithms.PriorCorrector),
-  and the student, which cannot see the ball's state, learns the whole command from the camera.
+  and the student, which cannot see the ball's state, learns the whole command from the camera. With
+  `--set command_prior=placo` the student instead estimates what the placo command is computed from: its
+  actions are the teacher's corrections and the game features after the proprioception (ball, goals,
+  opponent), labelled by the teacher's outputs and the truth (policies.algorithms.WorldLabeller), and its game
+  adds the placo command computed from that estimate (legged.soccer.learner).
 """
 
 from __future__ import annotations
@@ -150,7 +154,8 @@ def load_teacher(config: TrainConfig, env) -> tuple[TrainConfig, dict]:
         if payload["obs_sizes"].get(group) != sizes.get(mine.get(group, group)):
             raise RunDirError(f"teacher {path} observed {group} of size {payload['obs_sizes'].get(group)}, this "
                               f"environment gives {sizes.get(mine.get(group, group))}")
-    if payload["num_actions"] != env.action_size:
+    labels = payload["num_actions"] + getattr(env, "world_size", 0)  # a student that estimates the world: more
+    if labels != env.action_size:
         raise RunDirError(f"teacher {path} has {payload['num_actions']} actions, its student {env.action_size}")
     return teacher, payload
 
@@ -232,6 +237,12 @@ def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps:
     if method == "rma":  # the student acts with the teacher's head: same sizes
         changes["latent"] = dataclasses.replace(teacher.latent)
     config = apply_overrides(dataclasses.replace(teacher, **changes).resolved(), list(overrides))
+    if config.estimates_world:  # it adds the placo command itself, from its estimate: no command observation
+        if not teacher.command_prior:
+            raise ConfigError(f"command_prior=placo: the student adds the placo command to corrections it learns "
+                              f"from a teacher that corrected that command; teacher {teacher_run} did not "
+                              f"(its command_prior is '')")
+        config = dataclasses.replace(config, distill=dataclasses.replace(config.distill, teacher_prior=False))
     if method == "rma" and (config.ppo.actor_hidden, config.latent.latent_dim) != \
             (teacher.ppo.actor_hidden, teacher.latent.latent_dim):
         raise ConfigError("rma reuses the teacher's head: ppo.actor_hidden and latent.latent_dim must be the teacher's")

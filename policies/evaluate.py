@@ -54,6 +54,9 @@ def summarize(finals: list[dict], confined: bool) -> dict:
         goals_against = np.array([f["goals_against"] for f in finals])
         out.update(goals_for_per_episode=float(goals_for.mean()), goals_against_per_episode=float(goals_against.mean()),
                    win_rate=float((goals_for > goals_against).mean()))
+    estimates = sorted(k for k in finals[0] if k.startswith("estimate_"))
+    if estimates:  # a vision player that estimates the game: RMS position errors, metres
+        out["estimate_rms_m"] = {k[9:-2]: float(np.mean([f[k] for f in finals])) for k in estimates}
     if confined:
         success = np.array([f["success"] > 0 for f in finals])
         out["success_rate"] = float(success.mean())
@@ -99,7 +102,7 @@ def soccer_opponent(spec: str, env, policy=None):
 
     size = env.game.policy_state_size
     if spec in ("placo", "scripted"):
-        return (placo_opponent if spec == "placo" else scripted_opponent)(size, env.action_size)
+        return (placo_opponent if spec == "placo" else scripted_opponent)(size, env.player_action_size)
     if spec == "self":
         if policy is None or policy.backend != "rsl" or policy.inputs != ("state",):
             raise ValueError("--teammate self needs an rsl-rl policy on the state features (a vision or Brax "

@@ -152,7 +152,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     if config.self_play:
         from policies.selfplay import OpponentPool
 
-        pool = OpponentPool(config.selfplay, env.game.policy_state_size, env.action_size, ppo.actor_hidden,
+        pool = OpponentPool(config.selfplay, env.game.policy_state_size, env.player_action_size, ppo.actor_hidden,
                             seed=config.seed + launch.rank + 7919 * iteration)
         if payload is not None and "opponent_pool" in payload:
             pool.load_state_dict(payload["opponent_pool"])

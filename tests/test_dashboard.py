@@ -24,12 +24,15 @@ from legged.envs.confined import ConfinedConfig, ConfinedEnv
 from legged.robots import GO1
 from legged.worlds import Terrain, generate_world
 from web.geometry import box_mesh, capsule_mesh, cylinder_mesh, geom_meshes, sphere_mesh
+from web.overlays import OVERLAYS
 from web.trajectory import load_trajectory
 
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 STEPS = 50
 """Control steps recorded for the tests (1 s of simulated time)."""
+VISION_STUDENT = ROOT / "assets/runs/soccer-1v1-vision-wide-cpu2"
+"""A trained vision student that estimates the ball, goals and opponent from its camera (issue 18's evidence run)."""
 
 
 def free_port() -> int:
@@ -309,10 +312,11 @@ def test_dashboard_in_headless_chromium(recorded, tmp_path):
 
 @pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (CI installs it: .ci/install)")
 def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
-    """A vision soccer rollout shows the learner's head camera (what a vision student sees) in the Camera tab."""
+    """A vision student's rollout (a trained one that estimates the game) shows its head camera in the Camera
+    tab, and its estimate of the ball, goals and opponent as an overlay."""
     playwright = pytest.importorskip("playwright.sync_api", reason="playwright is a dev dependency")
     port = free_port()
-    command = [sys.executable, "-m", "legged.cli", "view", "--task", "soccer-1v1-vision", "--physics", "native",
+    command = [sys.executable, "-m", "legged.cli", "view", str(VISION_STUDENT), "--physics", "native",
                "--steps", "10", "--port", str(port)]
     proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             env={**os.environ, "PYTHONUNBUFFERED": "1"})
@@ -333,6 +337,11 @@ def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
                 return (spread, colours) if spread > 10 and colours >= 3 else None
 
             _poll(shown, 60, "the head camera image")
+            page.get_by_role("tab", name="Overlays").click()
+            label = page.locator("label", has_text=OVERLAYS["estimate"])
+            label.wait_for(timeout=30_000)
+            box = page.locator(f"[id='{label.get_attribute('for')}']").locator("xpath=descendant-or-self::input")
+            _poll(lambda: box.first.is_enabled() or None, 60, "the estimate overlay to be available")
             browser.close()
     finally:
         proc.terminate()
@@ -385,4 +394,37 @@ def test_navigation_replans_round_trip_and_show_from_their_frame(recorded, serve
     assert not np.allclose(target_before[1], overlays.nodes["target"][0].position[1])
     overlays.set_visible("replans", False)
     assert not any(node.visible for node in overlays.nodes["replans"])
+    overlays.remove()
+
+
+def test_a_vision_students_estimate_of_the_game_is_recorded_in_the_world_and_shown(server, tmp_path):
+    """A player that estimates the game (command_prior=placo on the vision task) has its estimate recorded as
+    world points; fed the truth, the points are the ball, the goal centres and the opponent."""
+    from legged.soccer.learner import LearnerView
+    from legged.soccer.observe import PROPRIO_SIZE
+    from legged.soccer.pitch import goal_centres
+    from policies.policy_io import load_walker
+    from web.overlays import Overlays
+    from web.rollout import Recorder, RecorderConfig
+
+    view = LearnerView(make("soccer-1v1-vision"), walker=load_walker("assets/policies/op3-walker", prior="placo"))
+    truth = lambda obs: np.concatenate([np.zeros((len(obs["features"]), 3)), obs["features"][:, PROPRIO_SIZE:]], -1)
+    traj = Recorder(view, "soccer-1v1-vision", RecorderConfig(physics="native")).record(3, seed=0, act=truth)
+    assert traj.estimates.shape == (4, 1, 4, 3)
+    for part in ("ball", "own_goal", "opponent_goal", "first_other"):  # the episode's RMS errors of the truth: 0
+        np.testing.assert_allclose(traj.metrics[f"estimate_{part}_m"][1:], 0.0, atol=1e-4)
+    layout = view.game.layout
+    for frame in range(3):
+        qpos = traj.qpos[frame, 0]
+        np.testing.assert_allclose(traj.estimates[frame, 0, 0], qpos[layout.ball_qpos_adr:layout.ball_qpos_adr + 3],
+                                   atol=1e-4)
+        np.testing.assert_allclose(traj.estimates[frame, 0, 1:3], goal_centres(view.config.scene), atol=1e-4)
+        opponent = qpos[layout.root_qpos_adr[1]:layout.root_qpos_adr[1] + 2]
+        np.testing.assert_allclose(traj.estimates[frame, 0, 3], [*opponent, 0.0], atol=1e-4)
+    loaded = load_trajectory(traj.save(tmp_path / "estimate.npz"))
+    np.testing.assert_array_equal(loaded.estimates, traj.estimates)
+    overlays = Overlays(server.scene, loaded)
+    assert overlays.available["estimate"]
+    overlays.update(2, np.zeros((0, 3)))
+    np.testing.assert_allclose(overlays.nodes["estimate"][0].points, traj.estimates[2, 0], atol=1e-6)
     overlays.remove()

@@ -40,6 +40,15 @@ def test_config_rejects_bad_values():
         SoccerSceneConfig(ball_radius=0.0)
     with pytest.raises(ValueError, match="head_camera_tilt_deg"):
         SoccerSceneConfig(head_camera_tilt_deg=90.0)
+    with pytest.raises(ValueError, match="head_camera_fovy_deg"):
+        SoccerSceneConfig(head_camera_fovy_deg=-10.0)
+
+
+def test_the_head_cameras_lens_is_the_mjcfs_unless_set():
+    cameras = lambda model: [c for c in range(model.ncam) if model.camera(c).name.endswith(OP3.head_camera)]
+    plain, wide = build_soccer_scene(SoccerSceneConfig()), build_soccer_scene(SoccerSceneConfig(head_camera_fovy_deg=70))
+    assert len(cameras(wide)) == 2 and all(plain.cam_fovy[c] == pytest.approx(43.3) for c in cameras(plain))
+    assert all(wide.cam_fovy[c] == pytest.approx(70.0) for c in cameras(wide))
 
 
 def test_compiles_with_namespaced_robots(scene):

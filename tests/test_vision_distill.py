@@ -2,6 +2,7 @@
 dagger|kl`): the KL loss, the errors, and a tiny distillation by each method in native physics."""
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -91,19 +92,40 @@ def test_a_vision_student_learns_from_the_state_player(soccer_teacher, tmp_path,
     assert dataclasses.replace(cfg.env, vision=False) == RunDir(soccer_teacher).load_config().env
 
 
-def test_a_teacher_that_corrected_the_placo_command_teaches_the_whole_command(tmp_path):
-    from rsl_rl.utils import resolve_class
+WALKER = "assets/policies/op3-walker"
 
+
+def _placo_teacher_config() -> TrainConfig:
+    """A tiny state soccer player whose commands correct the placo player's."""
+    return apply_overrides(TrainConfig(task="soccer-1v1", physics="native", threads=1, num_envs=2, timesteps=8,
+                                       checkpoint_every=1, walker=WALKER, command_prior="placo").resolved(), TINY)
+
+
+def _state_sizes() -> dict:
     from legged.soccer.learner import LearnerView
     from legged.tasks import make
+    from policies.policy_io import load_walker
+
+    return LearnerView(make("soccer-1v1"), walker=load_walker(WALKER, prior="placo")).observation_dims()
+
+
+@pytest.fixture(scope="module")
+def placo_teacher(tmp_path_factory):
+    """The run directory of an untrained `_placo_teacher_config` player (a checkpoint of its initial networks)."""
+    cfg, sizes = _placo_teacher_config(), _state_sizes()
+    teacher = RunDir(tmp_path_factory.mktemp("placo") / "teacher").create(cfg)
+    save_checkpoint(teacher, build_algorithm(cfg, dummy_observations(sizes, 2), 2, 3, "cpu"), 1, 8, sizes, 3)
+    return teacher.path
+
+
+def test_a_teacher_that_corrected_the_placo_command_teaches_the_whole_command(placo_teacher, tmp_path):
+    from rsl_rl.utils import resolve_class
+
     from policies.algorithms import teacher_model
     from policies.distill import start_distill
-    from policies.policy_io import load_policy, load_walker
+    from policies.policy_io import load_policy
 
-    walker = "assets/policies/op3-walker"
-    cfg = apply_overrides(TrainConfig(task="soccer-1v1", physics="native", threads=1, num_envs=2, timesteps=8,
-                                      checkpoint_every=1, walker=walker, command_prior="placo").resolved(), TINY)
-    sizes = LearnerView(make("soccer-1v1"), walker=load_walker(walker, prior="placo")).observation_dims()
+    cfg, sizes = _placo_teacher_config(), _state_sizes()
     obs = dummy_observations(sizes, 2)
     obs["features"], obs["command_prior"] = torch.randn(2, sizes["state"]), torch.randn(2, 3)
     cls, kwargs = resolve_class(teacher_model(cfg))
@@ -116,19 +138,76 @@ def test_a_teacher_that_corrected_the_placo_command_teaches_the_whole_command(tm
     plain(obs, stochastic_output=True)
     torch.testing.assert_close(corrector.output_mean, (plain.output_mean + obs["command_prior"]).clamp(-1.0, 1.0))
 
-    teacher = RunDir(tmp_path / "teacher").create(cfg)
-    save_checkpoint(teacher, build_algorithm(cfg, dummy_observations(sizes, 2), 2, 3, "cpu"), 1, 8, sizes, 3)
-    record = start_distill(str(teacher.path), "dagger", str(tmp_path / "student"), timesteps=16, progress=False,
+    record = start_distill(str(placo_teacher), "dagger", str(tmp_path / "student"), timesteps=16, progress=False,
                            task="soccer-1v1-vision")
     assert record["step"] == 16 and np.isfinite(record["loss_behavior"])
     student, scfg = load_policy(tmp_path / "student")
-    assert scfg.command_prior == "" and scfg.distill.teacher_prior and scfg.walker == walker
+    assert scfg.command_prior == "" and scfg.distill.teacher_prior and scfg.walker == WALKER
     assert student.inputs == ("state", "camera") and student.num_actions == 3
     from policies.drill import run_drill  # the student does the empty-goal drill through its own camera
 
     report = run_drill("empty-goal", str(tmp_path / "student"), episodes=1, seed=0, threads=1, progress=False,
                        num_envs=1)
     assert report["episodes"] == 1 and report["goal_rate"] in (0.0, 1.0)
+
+
+def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estimate(placo_teacher, tmp_path, capsys):
+    import jax
+    import jax.numpy as jnp
+    from rsl_rl.utils import resolve_class
+
+    from legged.soccer.learner import LearnerView
+    from legged.soccer.observe import PROPRIO_SIZE
+    from legged.tasks import make
+    from policies.algorithms import teacher_model
+    from policies.distill import start_distill
+    from policies.drill import run_drill
+    from policies.policy_io import load_policy, load_walker
+
+    walker = load_walker(WALKER, prior="placo")
+    view = LearnerView(make("soccer-1v1-vision"), walker=walker)
+    assert view.estimates_world and view.world_size == 14 and view.action_size == 17 and view.player_action_size == 3
+    state = jax.jit(view.reset)(jax.random.PRNGKey(0))
+    truth = state.obs["features"][PROPRIO_SIZE:]
+    correction = jnp.array([0.1, -0.2, 0.3])
+    joints = lambda world: view.learner_actions(state, jnp.concatenate([correction, world]))[0]
+    proprio = state.info["game_obs"]["state"][:1, :PROPRIO_SIZE]
+    command = walker.with_prior(correction[None], jnp.concatenate([proprio, truth[None]], -1))  # placo from the truth
+    expected = walker.actions(proprio, command, state.info["walker_state"][:1])[0]
+    np.testing.assert_allclose(joints(truth), expected, atol=1e-5)
+    assert jnp.abs(joints(truth.at[:2].add(jnp.array([-1.0, 1.0]))) - expected).max() > 1e-3  # the estimate counts
+
+    cfg = _placo_teacher_config()
+    sizes = _state_sizes()
+    obs = dummy_observations(sizes, 2)
+    obs["features"] = torch.randn(2, sizes["state"])
+    student_cfg = dataclasses.replace(cfg, task="soccer-1v1-vision", algo="dagger",
+                                      env=dataclasses.replace(cfg.env, vision=True))
+    cls, kwargs = resolve_class(teacher_model(cfg, student_cfg))
+    labeller = cls(obs, {"teacher": ["features"]}, "teacher", 17, **kwargs)
+    plain = MLPModel(obs, {"teacher": ["features"]}, "teacher", 3, **{k: v for k, v in kwargs.items()
+                                                                       if k != "corrections"})
+    plain.load_state_dict(labeller.state_dict())
+    torch.testing.assert_close(labeller(obs), torch.cat([plain(obs), obs["features"][:, PROPRIO_SIZE:]], -1))
+
+    assert main(["distill", str(placo_teacher), "--method", "kl", "--task", "soccer-1v1-vision", "--run-dir",
+                 str(tmp_path / "kl"), "--set", "command_prior=placo"]) == 2
+    err = capsys.readouterr().err
+    assert "only a dagger student" in err and err.count("\n") == 1, err
+    record = start_distill(str(placo_teacher), "dagger", str(tmp_path / "student"), timesteps=16, progress=False,
+                           task="soccer-1v1-vision", overrides=["command_prior=placo"])
+    assert record["step"] == 16 and np.isfinite(record["loss_behavior"])
+    student, scfg = load_policy(tmp_path / "student")
+    assert scfg.estimates_world and not scfg.distill.teacher_prior and student.num_actions == 17
+    report = run_drill("empty-goal", str(tmp_path / "student"), episodes=1, seed=0, threads=1, progress=False,
+                       num_envs=1)
+    assert report["episodes"] == 1
+    capsys.readouterr()
+    assert main(["eval", str(tmp_path / "student"), "--opponent", "placo", "--episodes", "1", "--num-envs", "1",
+                 "--physics", "native", "--threads", "1", "--json"]) == 0
+    errors = json.loads(capsys.readouterr().out)["estimate_rms_m"]  # how far its estimate was from the truth
+    assert sorted(errors) == ["ball", "first_other", "opponent_goal", "own_goal"]
+    assert all(0.0 < e < 100.0 for e in errors.values())
 
 
 def test_dagger_beta_falls_linearly_to_zero():

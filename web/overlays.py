@@ -1,6 +1,6 @@
 """Switchable overlays of a trajectory: planned path and waypoints, current target, height-scan points
-(floor and ceiling), contact points, the goal, and a navigation's replanned paths (each shown from the frame
-it was made on)."""
+(floor and ceiling), contact points, the goal, a navigation's replanned paths (each shown from the frame
+it was made on), and a vision player's estimate of the ball, goals and opponent."""
 
 from __future__ import annotations
 
@@ -11,12 +11,13 @@ from web.trajectory import Trajectory
 
 OVERLAYS = {"path": "planned path and waypoints", "target": "current target waypoint",
             "floor_scan": "floor height scan", "ceiling_scan": "ceiling height scan",
-            "contacts": "contact points", "goal": "goal", "replans": "replanned paths (navigation)"}
+            "contacts": "contact points", "goal": "goal", "replans": "replanned paths (navigation)",
+            "estimate": "estimated ball, goals, opponent (vision student)"}
 """Overlay name -> what it shows (the dashboard's checkbox labels)."""
 
 COLOURS = {"path": (40, 120, 255), "target": (255, 140, 0), "floor_scan": (30, 190, 90),
            "ceiling_scan": (220, 60, 200), "contacts": (230, 20, 20), "goal": (20, 200, 60),
-           "replans": (150, 70, 230)}
+           "replans": (150, 70, 230), "estimate": (255, 230, 0)}
 """Overlay colours (RGB)."""
 
 
@@ -48,7 +49,7 @@ class Overlays:
         t = self.traj
         return {"path": t.paths is not None, "target": t.waypoint is not None, "floor_scan": t.floor_scan is not None,
                 "ceiling_scan": t.ceiling_scan is not None, "contacts": True, "goal": t.goal is not None,
-                "replans": t.replans is not None}
+                "replans": t.replans is not None, "estimate": t.estimates is not None}
 
     def _points(self, name, points, kind, size):
         return self.scene.add_point_cloud(name, np.asarray(points, np.float32), COLOURS[kind], point_size=size,
@@ -89,10 +90,10 @@ class Overlays:
         if t.waypoint is not None and t.paths is not None:
             self.nodes["target"].append(self.scene.add_icosphere(
                 f"{root}/target", radius=0.06, color=COLOURS["target"], visible=self.shown["target"]))
-        for kind in ("floor_scan", "ceiling_scan"):
-            scan = getattr(t, kind)
-            if scan is not None:
-                self.nodes[kind].append(self._points(f"{root}/{kind}", scan[0, env] + t.offsets[env], kind, 0.015))
+        for kind, points, size in (("floor_scan", t.floor_scan, 0.015), ("ceiling_scan", t.ceiling_scan, 0.015),
+                                   ("estimate", t.estimates, 0.09)):
+            if points is not None:
+                self.nodes[kind].append(self._points(f"{root}/{kind}", points[0, env] + t.offsets[env], kind, size))
 
     def update(self, frame: int, contacts: np.ndarray) -> None:
         """Move the per-frame overlays to `frame`; `contacts` are world contact points (k, 3) of all envs."""
@@ -110,9 +111,10 @@ class Overlays:
                     (t.paths[env], t.path_len[env])
                 index = min(int(t.waypoint[frame, env]), int(length) - 1)
                 self.nodes["target"][env].position = path[index, :3].astype(np.float64) + offset
-            for kind in ("floor_scan", "ceiling_scan"):
+            for kind, points in (("floor_scan", t.floor_scan), ("ceiling_scan", t.ceiling_scan),
+                                 ("estimate", t.estimates)):
                 if self.nodes[kind]:
-                    self.nodes[kind][env].points = (getattr(t, kind)[frame, env] + offset).astype(np.float32)
+                    self.nodes[kind][env].points = (points[frame, env] + offset).astype(np.float32)
         handle = self.nodes["contacts"][0]
         if len(contacts):
             handle.points = np.asarray(contacts, np.float32)

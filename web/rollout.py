@@ -46,6 +46,8 @@ class Recorder:
         self.has_path = hasattr(env, "path_of")
         self.has_scans = hasattr(env, "scan_world_points")
         self.has_head_camera = hasattr(env, "camera_images")  # soccer: the learner's head camera
+        self.has_estimate = getattr(env, "estimates_world", False)  # a vision player's estimate of the game
+        self._estimate = jax.jit(jax.vmap(env.estimate_points)) if self.has_estimate else None
         if config.physics == "native":
             from legged.envs.native import NativeEnvs
 
@@ -115,6 +117,8 @@ class Recorder:
         for k in range(steps):
             action = zeros if act is None else np.asarray(act({name: np.asarray(v) for name, v in state.obs.items()}),
                                                           np.float32)
+            if self.has_estimate:  # made from what it saw at this frame
+                frames[-1]["estimate"] = np.asarray(self._estimate(state, action), np.float32)
             state, extras = self._step(state, action)
             frames.append(self._frame(state, extras))
             if progress is not None:
@@ -151,4 +155,7 @@ class Recorder:
                        waypoint=stack("waypoint"), goal=np.asarray(state.info["goal"], np.float32))
         if "camera" in frames[0]:
             out["camera"] = stack("camera")
+        if "estimate" in frames[0]:
+            frames[-1].setdefault("estimate", frames[-2]["estimate"])  # the last frame acts no more
+            out["estimates"] = stack("estimate")
         return Trajectory(**out)

@@ -18,6 +18,10 @@ import numpy as np
 FORMAT = "legged-trajectory-1"
 """Format tag stored in every file."""
 
+OPTIONAL = ("paths", "path_len", "waypoint", "goal", "floor_scan", "ceiling_scan", "camera", "estimates", "replans",
+            "replan_len", "replan_frame")
+"""Arrays a trajectory may lack."""
+
 
 def model_to_bytes(model: mujoco.MjModel) -> bytes:
     """The model as MJB bytes."""
@@ -65,6 +69,9 @@ class Trajectory:
     """World positions of the ceiling height-scan points (frames, envs, points, 3), or None."""
     camera: np.ndarray | None = None
     """Camera observations (frames, envs, H, W, 3) uint8, or None."""
+    estimates: np.ndarray | None = None
+    """World positions of what a vision player estimated from its camera (frames, envs, 4, 3): ball, own goal,
+    opponent goal, first other player (legged.soccer.learner.LearnerView.estimate_points), or None."""
     replans: np.ndarray | None = None
     """Paths a navigation replanned for environment 0 (replans, max_waypoints, 6), or None."""
     replan_len: np.ndarray | None = None
@@ -79,7 +86,8 @@ class Trajectory:
         checks = {"reward": (self.reward, (frames, envs)), "done": (self.done, (frames, envs)),
                   "offsets": (self.offsets, (envs,)), "waypoint": (self.waypoint, (frames, envs)),
                   "floor_scan": (self.floor_scan, (frames, envs)), "ceiling_scan": (self.ceiling_scan, (frames, envs)),
-                  "camera": (self.camera, (frames, envs)), "paths": (self.paths, (envs,)),
+                  "camera": (self.camera, (frames, envs)), "estimates": (self.estimates, (frames, envs, 4, 3)),
+                  "paths": (self.paths, (envs,)),
                   "path_len": (self.path_len, (envs,)), "goal": (self.goal, (envs,))}
         checks.update({f"metric {k}": (v, (frames, envs)) for k, v in self.metrics.items()})
         for name, (array, lead) in checks.items():
@@ -111,8 +119,7 @@ class Trajectory:
         arrays = {"format": np.array(FORMAT), "model_mjb": np.frombuffer(model_to_bytes(self.model), np.uint8),
                   "dt": np.array(self.dt), "info": np.array(json.dumps(self.info)), "qpos": self.qpos,
                   "reward": self.reward, "done": self.done, "offsets": self.offsets}
-        for name in ("paths", "path_len", "waypoint", "goal", "floor_scan", "ceiling_scan", "camera", "replans",
-                     "replan_len", "replan_frame"):
+        for name in OPTIONAL:
             if getattr(self, name) is not None:
                 arrays[name] = getattr(self, name)
         arrays.update({f"metric/{k}": v for k, v in self.metrics.items()})
@@ -156,8 +163,7 @@ def load_trajectory(path: str | Path) -> Trajectory:
         model = model_from_bytes(arrays["model_mjb"].tobytes())
     except Exception as exc:
         raise ValueError(f"{path}: the stored model cannot be loaded: {exc}") from None
-    optional = {k: arrays.get(k) for k in ("paths", "path_len", "waypoint", "goal", "floor_scan", "ceiling_scan",
-                                           "camera", "replans", "replan_len", "replan_frame")}
+    optional = {k: arrays.get(k) for k in OPTIONAL}
     return Trajectory(model=model, dt=float(arrays["dt"]), qpos=arrays["qpos"], reward=arrays["reward"],
                       done=arrays["done"], offsets=arrays["offsets"], info=json.loads(str(arrays["info"])),
                       metrics={k[7:]: v for k, v in arrays.items() if k.startswith("metric/")}, **optional)

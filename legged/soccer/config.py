@@ -78,6 +78,9 @@ class SoccerSceneConfig:
     """How far below the horizontal every head camera looks, degrees (the MJCF's camera looks level, so that a
     standing robot sees the ground only beyond 1.1 m and never the ball at its feet; a real OP3 tilts its head to
     watch the ball). Modelled as the camera's mount: the head's joints stay where the walking skill holds them."""
+    head_camera_fovy_deg: float = 0.0
+    """Vertical field of view of every head camera, degrees (a wider lens sees the ball at the feet and the goals
+    at once); 0: the MJCF's, 43.3 (the OP3's Logitech C920)."""
     camera_znear: float = 0.02
     """Near clipping distance of every camera, metres (hides the inside of the robot's own head)."""
     camera_zfar: float = 30.0
@@ -92,6 +95,9 @@ class SoccerSceneConfig:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)!r}")
         if not -90.0 < self.head_camera_tilt_deg < 90.0:
             raise ValueError(f"head_camera_tilt_deg must be between -90 and 90, got {self.head_camera_tilt_deg!r}")
+        if not 0.0 <= self.head_camera_fovy_deg < 180.0:
+            raise ValueError(f"head_camera_fovy_deg must be 0 (the MJCF's) or between 0 and 180, got "
+                             f"{self.head_camera_fovy_deg!r}")
         if self.circle_segments < 8:
             raise ValueError(f"circle_segments must be at least 8, got {self.circle_segments!r}")
         if self.wall_margin <= self.goal_depth + self.net_thickness:

@@ -152,6 +152,7 @@ class DrillEnv(LearnerView):
     def prepare(self, state: State, action: jax.Array):
         """Controls: agent 0 from the given action (or the placo player), the parked robot at rest."""
         memory, walker_state = state.info["players"], state.info["walker_state"]
+        estimate_sq = None if self.placo else self._estimate_sq(state, action)
         if self.placo:
             features = state.info["game_obs"]["privileged_state"][0, :self.game.policy_state_size]
             request = request_from_features(self.tables, features) if self.drill.name == "empty-goal" else \
@@ -162,7 +163,7 @@ class DrillEnv(LearnerView):
         else:
             action, walker_state = self.learner_actions(state, action)
         actions = jnp.stack([action, jnp.zeros_like(action)])
-        return self.game.joint_targets(actions), (actions, memory, walker_state)
+        return self.game.joint_targets(actions), (actions, memory, walker_state, estimate_sq)
 
     def transition(self, state: State, view: PhysicsView, actions) -> State:
         b = read_bodies(self.game.layout, view.qpos, view.qvel)

@@ -15,10 +15,11 @@ import jax.numpy as jnp
 from brax.envs.base import State
 
 from legged.envs.api import MjxEnv
+from legged.envs.math import yaw_rotate
 from legged.envs.physics import PhysicsView, Spawn
 from legged.sensors.raycam import render
 from legged.soccer.env import SoccerEnv
-from legged.soccer.observe import PROPRIO_SIZE
+from legged.soccer.observe import PROPRIO_SIZE, feature_layout, read_bodies
 from legged.soccer.opponents import Opponent, OpponentNet, opponent_step, scripted_opponent
 from legged.soccer.placo_player import load_tables
 from legged.soccer.vision import soccer_camera
@@ -27,28 +28,38 @@ from legged.soccer.walker import COMMAND_SIZE, Walker
 LEARNER = 0
 """Agent index the learner controls."""
 
+ESTIMATE_PARTS = {"ball": slice(0, 3), "own_goal": slice(6, 8), "opponent_goal": slice(8, 10),
+                  "first_other": slice(10, 12)}
+"""Positions in an estimate of the game features (legged.soccer.observe.game_features) whose errors are reported."""
+
 
 class LearnerView(MjxEnv):
     """Agent 0 of `game` as a Brax-style single-agent environment; `step(state, action, opponent=None)`
     (the opponent drives every other robot; None: the script). With `walker` the actions are velocity
     commands (legged.soccer.walker); with `teacher_prior` (vision games) the observations also hold
-    `command_prior`, the placo player's command as actions, which a state teacher's corrections add to."""
+    `command_prior`, the placo player's command as actions, which a state teacher's corrections add to.
+
+    A vision player whose walker adds the placo command (`command_prior=placo`) cannot read the ball and goals
+    that command is computed from; it estimates them (`estimates_world`): its actions are [corrections to the
+    placo command (3), its estimate of the game features after the proprioception (`world_size`: ball, goals,
+    other players, as legged.soccer.observe.game_features)], and the placo command is computed from its
+    proprioception and that estimate."""
 
     def __init__(self, game: SoccerEnv, net: OpponentNet = OpponentNet(), hidden: tuple[int, ...] = (),
                  walker: Walker | None = None, teacher_prior: bool = False):
         if teacher_prior and (walker is None or not game.config.vision):
             raise ValueError("teacher_prior (the placo command a vision student's teacher corrected) needs a walker "
                              "and a vision game")
-        if walker is not None and walker.prior is not None and game.config.vision:
-            raise ValueError("a walker with the placo command prior reads the ball and goals from the player's state "
-                             "features, which a vision player does not observe: its student must command the walker "
-                             "itself (no prior)")
+        self.estimates_world = walker is not None and walker.prior is not None and game.config.vision
+        if teacher_prior and self.estimates_world:
+            raise ValueError("teacher_prior (the placo command given as an observation) is for a vision student that "
+                             "learns the whole command; this one adds the placo command to its own (command_prior)")
         if game.camera is not None:  # the learner's observations need its own camera only
             game.camera = game.camera.select([LEARNER])
         self.game, self.net, self.walker, self.teacher_prior = game, net, walker, teacher_prior
         self.config, self.robot = game.config, game.robot
         self.mj_model, self.mjx_model = game.mj_model, game.mjx_model
-        self.default_opponent = scripted_opponent(game.policy_state_size, self.action_size, hidden)
+        self.default_opponent = scripted_opponent(game.policy_state_size, self.player_action_size, hidden)
         self.tables = load_tables()
         """The placo player's walk and kick (legged.soccer.placo_player)."""
         self._camera = None
@@ -65,7 +76,11 @@ class LearnerView(MjxEnv):
         return self.game.spawn(rng, carry)
 
     def first_state(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
-        return self._view(self.game.first_state(view, info, rng))
+        game = self.game.first_state(view, info, rng)
+        if self.estimates_world:  # running sums of its estimate's squared errors, and of the steps
+            game = game.replace(info=dict(game.info, estimate_sq=jnp.zeros(len(ESTIMATE_PARTS)),
+                                          estimate_steps=jnp.zeros(())))
+        return self._view(game)
 
     def prepare(self, state: State, action: jax.Array, opponent: Opponent | None = None,
                 teammate: Opponent | None = None):
@@ -89,7 +104,7 @@ class LearnerView(MjxEnv):
             walker_state = walker_state.at[LEARNER + 1:].set(stepped)
         actions = jnp.concatenate([mine[None], played])
         memory = state.info["players"].at[LEARNER + 1:].set(moved)
-        return self.game.joint_targets(actions), (actions, memory, walker_state)
+        return self.game.joint_targets(actions), (actions, memory, walker_state, self._estimate_sq(state, action))
 
     def learner_actions(self, state: State, action: jax.Array) -> tuple[jax.Array, jax.Array]:
         """(the learner's joint actions (20,), every robot's walker state with the learner's stepped): its
@@ -99,19 +114,53 @@ class LearnerView(MjxEnv):
             return action, walker_state
         features = state.info["game_obs"]["state"][LEARNER:LEARNER + 1]
         proprio = features[:, :PROPRIO_SIZE]
+        if self.estimates_world:  # the placo command from what it sees, not from the truth
+            action, features = action[:COMMAND_SIZE], jnp.concatenate([proprio, action[None, COMMAND_SIZE:]], -1)
         mine = walker_state[LEARNER:LEARNER + 1]
         action = self.walker.with_prior(action[None], features)[0]
         joints = self.walker.actions(proprio, action[None], mine)[0]
         return joints, walker_state.at[LEARNER].set(self.walker.step(mine, action[None], proprio)[0])
 
     @property
-    def action_size(self) -> int:
-        """The learner's actions: its joints, or with a walker a velocity command."""
+    def player_action_size(self) -> int:
+        """A player's actions (the opponents'): its joints, or with a walker a velocity command."""
         return COMMAND_SIZE if self.walker is not None else self.game.action_size
 
+    @property
+    def world_size(self) -> int:
+        """Length of the learner's estimate of the game features among its actions (0 unless `estimates_world`)."""
+        if not self.estimates_world:
+            return 0
+        return sum(k for _, k in feature_layout(self.game.layout.players_per_team)) - PROPRIO_SIZE
+
+    def estimate_points(self, state: State, action: jax.Array) -> jax.Array:
+        """World positions [4, 3] of what the learner's `action` estimates (`estimates_world`): the ball, its own
+        goal, the opponent goal and the first other player (its teammate in 2v2), the last three on the ground;
+        jittable."""
+        world = action[COMMAND_SIZE:]
+        b = read_bodies(self.game.layout, state.pipeline_state.qpos, state.pipeline_state.qvel)
+        ego = jnp.stack([world[part][:2] for part in ESTIMATE_PARTS.values()])
+        xy = b.pos[LEARNER, :2] + yaw_rotate(-b.yaw[LEARNER], ego)
+        z = jnp.array([b.pos[LEARNER, 2] + world[2], 0.0, 0.0, 0.0])
+        return jnp.concatenate([xy, z[:, None]], -1)
+
+    @property
+    def action_size(self) -> int:
+        """The learner's actions: a player's, then its estimate of the game features (`estimates_world`)."""
+        return self.player_action_size + self.world_size
+
+    def _estimate_sq(self, state: State, action: jax.Array) -> jax.Array | None:
+        """Squared errors of the learner's estimate (`estimates_world`) of each of ESTIMATE_PARTS, metres^2."""
+        if not self.estimates_world:
+            return None
+        error = action[COMMAND_SIZE:] - state.info["game_obs"]["features"][LEARNER, PROPRIO_SIZE:]
+        return jnp.stack([jnp.sum(error[part] ** 2) for part in ESTIMATE_PARTS.values()])
+
     def transition(self, state: State, view: PhysicsView, actions) -> State:
-        actions, memory, walker_state = actions
+        actions, memory, walker_state, estimate_sq = actions
         info = dict(state.info, players=memory, walker_state=walker_state)
+        if estimate_sq is not None:
+            info.update(estimate_sq=info["estimate_sq"] + estimate_sq, estimate_steps=info["estimate_steps"] + 1.0)
         game_obs = info.pop("game_obs")
         game = State(view, game_obs, jnp.zeros(self.game.n_agents), state.done, {}, info)
         return self._view(self.game.transition(game, view, actions))
@@ -141,6 +190,9 @@ class LearnerView(MjxEnv):
         metrics = {k: v[LEARNER] if v.ndim else v for k, v in game.metrics.items()
                    if k not in ("goals_home", "goals_away")}
         metrics.update(goals_for=game.metrics["goals_home"], goals_against=game.metrics["goals_away"])
+        if self.estimates_world:  # root mean square over the episode so far
+            rms = jnp.sqrt(game.info["estimate_sq"] / jnp.maximum(game.info["estimate_steps"], 1.0))
+            metrics.update({f"estimate_{name}_m": rms[k] for k, name in enumerate(ESTIMATE_PARTS)})
         info = {**game.info, "game_obs": game.obs}
         obs = {k: v[LEARNER] for k, v in game.obs.items()}
         if self.teacher_prior:  # what the teacher's corrections were added to, from the state it reads

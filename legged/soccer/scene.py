@@ -107,6 +107,8 @@ def _add_robot(spec: mujoco.MjSpec, config: SoccerSceneConfig, team: int, player
         tilt = np.deg2rad(config.head_camera_tilt_deg)
         camera = child.camera(OP3.head_camera)
         camera.alt.xyaxes = [0.0, -1.0, 0.0, float(np.sin(tilt)), 0.0, float(np.cos(tilt))]
+        if config.head_camera_fovy_deg:
+            camera.fovy = config.head_camera_fovy_deg
     root = child.body(OP3.root_body)
     root.pos = [0.0, 0.0, _QPOS0_HEIGHT]
     x, y, yaw = (float(v) for v in pose)
