@@ -28,9 +28,22 @@ from legged.soccer.walker import COMMAND_SIZE, Walker
 LEARNER = 0
 """Agent index the learner controls."""
 
-ESTIMATE_PARTS = {"ball": slice(0, 3), "own_goal": slice(6, 8), "opponent_goal": slice(8, 10),
-                  "first_other": slice(10, 12)}
-"""Positions in an estimate of the game features (legged.soccer.observe.game_features) whose errors are reported."""
+
+def _game_slices(players_per_team: int) -> dict[str, slice]:
+    """Named slices of the game features after the proprioception (legged.soccer.observe.feature_layout)."""
+    out, start = {}, 0
+    for name, size in feature_layout(players_per_team)[1:]:
+        out[name], start = slice(start, start + size), start + size
+    return out
+
+
+def estimate_parts(players_per_team: int) -> dict[str, slice]:
+    """Positions in an estimate of the game features whose errors are reported and drawn: ball (x, y, z), own
+    and opponent goal (x, y), the first other player's position (x, y; the teammate in 2v2)."""
+    parts = _game_slices(players_per_team)
+    first_other = list(parts.values())[4]
+    return {"ball": parts["ball"], "own_goal": parts["own_goal"], "opponent_goal": parts["opponent_goal"],
+            "first_other": slice(first_other.start, first_other.start + 2)}
 
 
 class LearnerView(MjxEnv):
@@ -60,6 +73,8 @@ class LearnerView(MjxEnv):
         self.config, self.robot = game.config, game.robot
         self.mj_model, self.mjx_model = game.mj_model, game.mjx_model
         self.default_opponent = scripted_opponent(game.policy_state_size, self.player_action_size, hidden)
+        self.estimate_parts = estimate_parts(game.layout.players_per_team)
+        """Positions of the learner's estimate whose errors are reported (`estimates_world`)."""
         self.tables = load_tables()
         """The placo player's walk and kick (legged.soccer.placo_player)."""
         self._camera = None
@@ -78,7 +93,7 @@ class LearnerView(MjxEnv):
     def first_state(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
         game = self.game.first_state(view, info, rng)
         if self.estimates_world:  # running sums of its estimate's squared errors, and of the steps
-            game = game.replace(info=dict(game.info, estimate_sq=jnp.zeros(len(ESTIMATE_PARTS)),
+            game = game.replace(info=dict(game.info, estimate_sq=jnp.zeros(len(self.estimate_parts)),
                                           estimate_steps=jnp.zeros(())))
         return self._view(game)
 
@@ -139,7 +154,7 @@ class LearnerView(MjxEnv):
         jittable."""
         world = action[COMMAND_SIZE:]
         b = read_bodies(self.game.layout, state.pipeline_state.qpos, state.pipeline_state.qvel)
-        ego = jnp.stack([world[part][:2] for part in ESTIMATE_PARTS.values()])
+        ego = jnp.stack([world[part][:2] for part in self.estimate_parts.values()])
         xy = b.pos[LEARNER, :2] + yaw_rotate(-b.yaw[LEARNER], ego)
         z = jnp.array([b.pos[LEARNER, 2] + world[2], 0.0, 0.0, 0.0])
         return jnp.concatenate([xy, z[:, None]], -1)
@@ -150,11 +165,11 @@ class LearnerView(MjxEnv):
         return self.player_action_size + self.world_size
 
     def _estimate_sq(self, state: State, action: jax.Array) -> jax.Array | None:
-        """Squared errors of the learner's estimate (`estimates_world`) of each of ESTIMATE_PARTS, metres^2."""
+        """Squared errors of the learner's estimate (`estimates_world`) of each of `estimate_parts`, metres^2."""
         if not self.estimates_world:
             return None
         error = action[COMMAND_SIZE:] - state.info["game_obs"]["features"][LEARNER, PROPRIO_SIZE:]
-        return jnp.stack([jnp.sum(error[part] ** 2) for part in ESTIMATE_PARTS.values()])
+        return jnp.stack([jnp.sum(error[part] ** 2) for part in self.estimate_parts.values()])
 
     def transition(self, state: State, view: PhysicsView, actions) -> State:
         actions, memory, walker_state, estimate_sq = actions
@@ -192,7 +207,7 @@ class LearnerView(MjxEnv):
         metrics.update(goals_for=game.metrics["goals_home"], goals_against=game.metrics["goals_away"])
         if self.estimates_world:  # root mean square over the episode so far
             rms = jnp.sqrt(game.info["estimate_sq"] / jnp.maximum(game.info["estimate_steps"], 1.0))
-            metrics.update({f"estimate_{name}_m": rms[k] for k, name in enumerate(ESTIMATE_PARTS)})
+            metrics.update({f"estimate_{name}_m": rms[k] for k, name in enumerate(self.estimate_parts)})
         info = {**game.info, "game_obs": game.obs}
         obs = {k: v[LEARNER] for k, v in game.obs.items()}
         if self.teacher_prior:  # what the teacher's corrections were added to, from the state it reads
