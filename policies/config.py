@@ -166,6 +166,10 @@ class TrainConfig:
     """Seed of environments and networks."""
     checkpoint_every: int = 10
     """Iterations between checkpoints (the last one is always written)."""
+    random_episode_start: bool = False
+    """rsl backend: whenever training starts or resumes, each environment's episode clock starts at a random step
+    of its time limit (rsl-rl's init_at_random_ep_len), so that episodes end on different iterations instead of
+    all together (e.g. 512 soccer games of 60 s) and every rollout holds every phase of an episode."""
     device: str = "cpu"
     """PyTorch device of the rsl backend (cpu, cuda, cuda:1, ...)."""
     physics: Literal["mjx", "native"] = "mjx"
@@ -227,6 +231,8 @@ class TrainConfig:
         if cfg.backend == "brax" and cfg.physics == "native":
             raise ConfigError("--backend brax needs --physics mjx (Brax PPO compiles the environment into its "
                               "training step); train native physics with --backend rsl")
+        if cfg.backend == "brax" and cfg.random_episode_start:
+            raise ConfigError("random_episode_start is for --backend rsl (Brax PPO resets its environments itself)")
         if cfg.threads < 0:
             raise ConfigError(f"threads must be >= 1 (or 0 for every core), got {cfg.threads}")
         for name in ("num_envs", "timesteps", "checkpoint_every"):

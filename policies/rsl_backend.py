@@ -19,6 +19,7 @@ from tqdm import tqdm
 
 from legged.envs.native import default_threads
 from legged.envs.vector import VectorEnv
+from legged.tasks import task_entry
 from policies.algorithms import (  # noqa: F401 (build_ppo: a re-export)
     attach_information_bottleneck,
     attach_teacher_kl,
@@ -121,6 +122,9 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     venv = RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device,
                      latent_noise=config.latent.latent_dim if hib else 0,
                      levels=None if levels is None else levels.numpy())
+    if config.random_episode_start:  # episodes end on different iterations
+        generator = torch.Generator().manual_seed(config.seed + launch.rank + 7919 * iteration)
+        venv.episode_length_buf = torch.randint(0, env.config.episode_steps, (local_envs,), generator=generator)
     teacher = None
     if config.algo in DISTILL_ALGOS:
         from policies.distill import load_teacher
@@ -134,8 +138,11 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         attach_teacher_kl(alg, config, *teacher, venv.get_observations(), iteration)
     if payload is not None:
         alg.load(payload["alg"], None, strict=True)
-        if isinstance(alg, Distillation):  # its schedule (policies.distill.MixedDAgger) goes on
+        if isinstance(alg, Distillation):  # its schedule (policies.distill.MixedDAgger) goes on, at the config's rate
             alg.num_updates = iteration
+            alg.learning_rate = config.distill.learning_rate
+            for group in alg.optimizer.param_groups:
+                group["lr"] = config.distill.learning_rate
         if launch.is_main:
             torch.set_rng_state(payload["torch_rng"])
     elif teacher is not None and config.algo != "kl":  # kl: a fresh student, pulled towards its teacher
@@ -156,6 +163,11 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                             seed=config.seed + launch.rank + 7919 * iteration)
         if payload is not None and "opponent_pool" in payload:
             pool.load_state_dict(payload["opponent_pool"])
+    elif task_entry(config.task).kind == "soccer":  # without self-play: the configured script plays every game
+        from policies.selfplay import script_opponents
+
+        venv.env_args = script_opponents(config.selfplay, env.game.policy_state_size, env.player_action_size,
+                                         env.game.layout.players_per_team)
     if launch.distributed:
         alg.broadcast_parameters()  # every process starts from rank 0's networks
     from torch.utils.tensorboard import SummaryWriter
@@ -214,6 +226,8 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                       **{f"loss_{k}": float(v) for k, v in losses.items() if k != "symmetry"}, **diagnostics}
             if pool is not None:
                 record.update(opponent=opponent, opponent_pool=len(pool.snapshots))
+            elif venv.env_args:
+                record.update(opponent=-1)
             bar.update(per_iteration)
             bar.set_postfix(ret=_short(record["episode_return"]), sps=f"{record['steps_per_s']:.0f}")
             if diverged:

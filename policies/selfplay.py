@@ -35,6 +35,13 @@ def snapshot_rsl_actor(actor: torch.nn.Module) -> Opponent:
     return network_opponent(mean, std, layers)
 
 
+def script_opponents(config: SelfPlayConfig, obs_size: int, action_size: int, players_per_team: int) -> tuple:
+    """The env-step arguments of a soccer run without a pool (vision tasks, `selfplay.opponent=scripted`): the
+    script `config.script` drives every other robot, the learner's teammate in 2v2 too."""
+    script = (placo_opponent if config.script == "placo" else scripted_opponent)(obs_size, action_size)
+    return (script, script) if players_per_team > 1 else (script,)
+
+
 class OpponentPool:
     """The last `pool_size` snapshots; `sample` picks the script (`config.script`) or a snapshot for the next
     iteration."""

@@ -6,7 +6,7 @@ import pytest
 import torch
 
 from policies import training
-from policies.config import ConfigError, PPOConfig, TrainConfig, apply_overrides
+from policies.config import ConfigError, PPOConfig, SelfPlayConfig, TrainConfig, apply_overrides
 from policies.evaluate import summarize
 from policies.export import export_onnx
 from policies.policy_io import load_policy
@@ -53,6 +53,37 @@ def test_self_play_snapshots_become_opponents_without_recompiling(tmp_path, monk
     held = [i for i in range(1, len(records)) if i not in draws]
     assert held and all(records[i]["opponent"] == records[i - 1]["opponent"] for i in held)
     assert records[0]["opponent"] == -1 and records[draws[0] - 1]["opponent"] == -1  # the first game: the script
+
+
+def test_a_run_without_self_play_plays_the_configured_script(tmp_path, monkeypatch):
+    import policies.selfplay as selfplay
+
+    env = _env("soccer-1v1")
+    monkeypatch.setattr(training, "build_env", lambda config: env)
+    made = []
+    real = selfplay.script_opponents
+    monkeypatch.setattr(selfplay, "script_opponents", lambda *args: made.append(real(*args)) or made[-1])
+    run_dir = tmp_path / "scripted"
+    training.start_run("soccer-1v1", str(run_dir), num_envs=2, timesteps=20, progress=False, physics="native",
+                       threads=1, overrides=TINY + ["selfplay.opponent=scripted"])
+    assert [r["opponent"] for r in RunDir(run_dir).metrics()] == [-1, -1]
+    assert len(made) == 1 and len(made[0]) == 1 and float(made[0][0].placo) == 1.0  # the placo player, not standing
+    standing = selfplay.script_opponents(SelfPlayConfig(script="standing"), 8, 3, 2)
+    assert len(standing) == 2 and float(standing[0].placo) == 0.0  # 2v2: the teammate plays the script too
+
+
+def test_random_episode_starts_end_the_first_episodes_early(tmp_path, monkeypatch):
+    env = training.build_env(apply_overrides(TrainConfig(task="soccer-1v1", num_envs=4).resolved(), TINY))
+    monkeypatch.setattr(training, "build_env", lambda config: env)
+    ended = {}
+    for random_start in (False, True):
+        run_dir = tmp_path / str(random_start)
+        training.start_run("soccer-1v1", str(run_dir), num_envs=4, timesteps=20, progress=False, physics="native",
+                           threads=1, overrides=TINY + [f"random_episode_start={str(random_start).lower()}"])
+        ended[random_start] = RunDir(run_dir).metrics()[0]["episodes"]
+    assert ended == {False: 0, True: ended[True]} and ended[True] > 0  # 10-step episodes, 5 steps per iteration
+    with pytest.raises(ConfigError, match="random_episode_start is for --backend rsl"):
+        apply_overrides(TrainConfig(task="soccer-1v1", backend="brax").resolved(), ["random_episode_start=true"])
 
 
 def test_camera_tasks_get_a_cnn_actor_that_saves_loads_and_acts(tmp_path):

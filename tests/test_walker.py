@@ -141,6 +141,31 @@ def test_with_the_placo_prior_actions_correct_the_placo_players_command():
         TrainConfig(task="soccer-1v1", command_prior="placo").resolved()
 
 
+def test_a_gazing_vision_player_pans_its_head_toward_the_ball_it_estimates():
+    """vision_gaze: the head pan joint's action faces the estimated ball (clipped to HEAD_PAN_LIMIT); every other
+    joint is the walker's; it needs a player that estimates the game."""
+    from legged.robots.op3 import OP3
+    from legged.soccer.opponents import HEAD_PAN_LIMIT
+    from legged.soccer.placo_player import load_tables
+
+    size = PROPRIO_SIZE + 8
+    walker = dataclasses.replace(_walker([(np.zeros((size, 20), np.float32), np.full(20, 0.1, np.float32))]),
+                                 prior=load_tables())
+    views = {gaze: LearnerView(make("soccer-1v1-vision", vision_gaze=gaze), walker=walker) for gaze in (False, True)}
+    state = jax.tree.map(lambda x: x[0], VectorEnv.of(views[True], 1, "native", 1).reset(jax.random.PRNGKey(5)).state)
+    action = jnp.zeros(17).at[3:5].set(jnp.asarray([1.0, 1.0]))  # no corrections; the ball 45 degrees left
+    joints = {gaze: np.asarray(views[gaze].learner_actions(state, action)[0]) for gaze in (False, True)}
+    assert joints[False][0] == pytest.approx(0.1, abs=1e-6)  # the walker's head
+    assert joints[True][0] == pytest.approx(np.pi / 4 / OP3.action_scale, rel=1e-5)
+    np.testing.assert_allclose(joints[True][1:], joints[False][1:])
+    behind = np.asarray(views[True].learner_actions(state, action.at[3:5].set(jnp.asarray([-1.0, -0.01])))[0])
+    assert behind[0] == pytest.approx(-HEAD_PAN_LIMIT / OP3.action_scale, rel=1e-5)
+    with pytest.raises(ValueError, match="estimates the game"):
+        LearnerView(make("soccer-1v1-vision", vision_gaze=True), walker=dataclasses.replace(walker, prior=None))
+    with pytest.raises(ValueError, match="needs vision"):
+        make("soccer-1v1", vision_gaze=True)
+
+
 def test_a_walker_must_step_at_the_games_control_rate():
     from legged.tasks import learner_env, task_entry
 

@@ -20,13 +20,15 @@ from legged.envs.physics import PhysicsView, Spawn
 from legged.sensors.raycam import render
 from legged.soccer.env import SoccerEnv
 from legged.soccer.observe import PROPRIO_SIZE, feature_layout, read_bodies
-from legged.soccer.opponents import Opponent, OpponentNet, opponent_step, scripted_opponent
+from legged.soccer.opponents import Opponent, OpponentNet, ball_pan, opponent_step, scripted_opponent
 from legged.soccer.placo_player import load_tables
 from legged.soccer.vision import soccer_camera
-from legged.soccer.walker import COMMAND_SIZE, Walker
+from legged.soccer.walker import COMMAND_SIZE, Walker, getting_up
 
 LEARNER = 0
 """Agent index the learner controls."""
+HEAD_PAN = 0
+"""Index of the head pan joint in the OP3's joint actions (RobotSpec.joint_names)."""
 
 
 def _game_slices(players_per_team: int) -> dict[str, slice]:
@@ -67,6 +69,9 @@ class LearnerView(MjxEnv):
         if teacher_prior and self.estimates_world:
             raise ValueError("teacher_prior (the placo command given as an observation) is for a vision student that "
                              "learns the whole command; this one adds the placo command to its own (command_prior)")
+        if game.config.vision_gaze and not self.estimates_world:
+            raise ValueError("vision_gaze turns the head toward the player's own estimate of the ball: it needs a "
+                             "vision player that estimates the game (a walker with the placo prior: command_prior=placo)")
         if game.camera is not None:  # the learner's observations need its own camera only
             game.camera = game.camera.select([LEARNER])
         self.game, self.net, self.walker, self.teacher_prior = game, net, walker, teacher_prior
@@ -134,6 +139,9 @@ class LearnerView(MjxEnv):
         mine = walker_state[LEARNER:LEARNER + 1]
         action = self.walker.with_prior(action[None], features)[0]
         joints = self.walker.actions(proprio, action[None], mine)[0]
+        if self.config.vision_gaze:  # look toward the ball it estimates (the ball's x, y lead the features)
+            pan = ball_pan(features[0, PROPRIO_SIZE:PROPRIO_SIZE + 2]) / self.robot.action_scale
+            joints = joints.at[HEAD_PAN].set(jnp.where(getting_up(mine[0]), joints[HEAD_PAN], pan))
         return joints, walker_state.at[LEARNER].set(self.walker.step(mine, action[None], proprio)[0])
 
     @property

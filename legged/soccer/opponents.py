@@ -83,15 +83,23 @@ def network_actions(net: OpponentNet, opp: Opponent, obs) -> jax.Array:
     return jnp.tanh(x) if net.squash else x
 
 
+HEAD_PAN_LIMIT = 1.2
+"""Largest head pan (radians either way) with which a player looks toward the ball (the joint reaches 1.57)."""
+
+
+def ball_pan(ball_xy: jax.Array) -> jax.Array:
+    """Head pan [...] that faces a ball at `ball_xy` [..., 2] in the heading frame, within HEAD_PAN_LIMIT."""
+    return jnp.clip(jnp.arctan2(ball_xy[..., 1], ball_xy[..., 0]), -HEAD_PAN_LIMIT, HEAD_PAN_LIMIT)
+
+
 def scripted_actions(obs, action_scale: float, head_pan: int = 0, head_tilt: int = 1) -> jax.Array:
     """The scripted player: stands in its default pose and keeps its head on the ball (pan toward the
     ball's bearing, tilt toward its depression), like a goalkeeper that does not move. A weak, fixed
     reference opponent for evaluation; its actions are [..., 20]."""
     ball = obs[..., PROPRIO_SIZE:PROPRIO_SIZE + 3]  # ball position in the heading frame
-    bearing = jnp.arctan2(ball[..., 1], ball[..., 0])
     depression = jnp.arctan2(jnp.maximum(0.45 - ball[..., 2], 0.0), jnp.linalg.norm(ball[..., :2], axis=-1))
     actions = jnp.zeros(obs.shape[:-1] + (20,))
-    actions = actions.at[..., head_pan].set(jnp.clip(bearing, -1.2, 1.2) / action_scale)
+    actions = actions.at[..., head_pan].set(ball_pan(ball[..., :2]) / action_scale)
     return actions.at[..., head_tilt].set(-jnp.clip(depression, 0.0, 0.9) / action_scale)
 
 

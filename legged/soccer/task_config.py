@@ -71,6 +71,10 @@ class SoccerConfig(EnvConfig):
     """Size and appearance of the head camera images."""
     vision_heading: bool = False
     """With `vision`: 'state' also ends with the attacking direction in the agent's heading frame (an IMU's yaw)."""
+    vision_gaze: bool = False
+    """With `vision`, for a player that estimates the game (command_prior=placo): its head pans toward where it
+    estimates the ball to be (legged.soccer.opponents.ball_pan), keeping the ball in view; false: the walker
+    holds the head."""
     rewards: SoccerRewards = SoccerRewards()
     """Reward weights."""
     randomization: SoccerRandomization = SoccerRandomization()
@@ -84,6 +88,8 @@ class SoccerConfig(EnvConfig):
             raise ValueError(f"end_on_fall must be 'agent0', 'any' or 'never', got {self.end_on_fall!r}")
         if self.spawn_spread < 0 or self.restart_inset < 0:
             raise ValueError("spawn_spread and restart_inset must be non-negative")
+        if self.vision_gaze and not self.vision:
+            raise ValueError("vision_gaze turns a vision player's head toward the ball it estimates: it needs vision")
         if self.vision_heading and not self.vision:
             raise ValueError("vision_heading adds the attacking direction to a vision player's state: it needs vision")
         if 2 * self.restart_inset >= min(self.scene.field_length, self.scene.field_width):

@@ -44,6 +44,11 @@ GETUP_RETRY_S = 1.0
 """Seconds after the get-up's script ended without standing before it starts again."""
 
 
+def getting_up(state: jax.Array) -> jax.Array:
+    """Whether each robot of walker states [..., WALKER_STATE_SIZE] is getting up (its get-up skill has the joints)."""
+    return state[..., 4] > 0.5
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class Walker:
     """A frozen walking policy (an op3-walk run's deterministic actor) and the commands it was trained on."""
@@ -106,7 +111,7 @@ class Walker:
             targets = jax.vmap(lambda s: gait_targets(self.gait, s[0], s[1:4]))(state)
             out = out + actions_of(targets, jnp.asarray(self.default_pose), self.action_scale)
         if self.getup_motion is not None:
-            out = jnp.where(state[:, 4:5] > 0.5, self._getup_actions(proprio, state[:, 6], state[:, 5]), out)
+            out = jnp.where(getting_up(state)[:, None], self._getup_actions(proprio, state[:, 6], state[:, 5]), out)
         return out
 
     def _getup_actions(self, proprio: jax.Array, back: jax.Array, t: jax.Array) -> jax.Array:
@@ -126,18 +131,18 @@ class Walker:
         get-up skill, who gets up next is decided from their proprioception [n, 66] now."""
         phase = advance_phase(state[:, 0], self.dt, self.gait)
         filtered = filter_command(state[:, 1:4], self.command(action), self.dt, self.gait)
-        getting_up = jnp.zeros_like(phase, dtype=bool)
+        rising = jnp.zeros_like(phase, dtype=bool)
         t, back = jnp.zeros_like(phase), jnp.zeros_like(phase)
         if self.getup_motion is not None:
             up_z = -proprio[:, 2]  # the proprioception starts with gravity in the torso frame
             stood = (up_z > GETUP_END_UP_Z) & (jnp.mean(jnp.abs(proprio[:, 6:26]), axis=-1) < GETUP_END_POSE_RAD)
-            was = state[:, 4] > 0.5
-            getting_up = jnp.where(was, ~stood, up_z < GETUP_START_UP_Z)
+            was = getting_up(state)
+            rising = jnp.where(was, ~stood, up_z < GETUP_START_UP_Z)
             retry = was & (state[:, 5] >= self.getup_motion.length[state[:, 6].astype(jnp.int32)] + GETUP_RETRY_S)
-            again = getting_up & (~was | retry)                    # a script (re)starts: choose it, clock at 0
+            again = rising & (~was | retry)                    # a script (re)starts: choose it, clock at 0
             back = jnp.where(again, lies_on_back(proprio[:, :3]), state[:, 6])
-            t = jnp.where(getting_up & ~again, state[:, 5] + self.dt, 0.0)
-            phase = jnp.where(getting_up, 0.0, phase)
-            filtered = jnp.where(getting_up[:, None], 0.0, filtered)
-        return jnp.concatenate([phase[:, None], filtered, getting_up[:, None].astype(phase.dtype), t[:, None],
+            t = jnp.where(rising & ~again, state[:, 5] + self.dt, 0.0)
+            phase = jnp.where(rising, 0.0, phase)
+            filtered = jnp.where(rising[:, None], 0.0, filtered)
+        return jnp.concatenate([phase[:, None], filtered, rising[:, None].astype(phase.dtype), t[:, None],
                                 back[:, None]], axis=-1)
