@@ -31,6 +31,7 @@ from rsl_rl.algorithms import PPO
 from rsl_rl.models import MLPModel
 from tensordict import TensorDict
 
+from legged.envs.api import layout_slices
 from policies.config import HISTORY_ALGOS, PPOConfig, TrainConfig
 from policies.distributed import Launch
 from policies.latent_models import NOISE_GROUP, LatentActor
@@ -231,12 +232,7 @@ def zero_output_layer(actor: torch.nn.Module) -> None:
 
 def privileged_slices(layout: dict, names=DYNAMICS_GROUPS) -> list[slice]:
     """Slices of `privileged_state` holding the named entries (an env's `observation_layout()`)."""
-    out, start = [], 0
-    for name, size in layout["privileged_state"]:
-        if name in names:
-            out.append(slice(start, start + size))
-        start += size
-    return out
+    return [part for name, part in layout_slices(layout["privileged_state"]).items() if name in names]
 
 
 def attach_teacher_kl(alg: PPO, config: TrainConfig, teacher: TrainConfig, payload: dict, obs: TensorDict,

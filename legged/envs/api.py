@@ -18,6 +18,15 @@ from mujoco import mjx
 from legged.envs.physics import PhysicsView, Spawn, reject_divergence, strong_types, view_of_mjx
 
 
+def layout_slices(entries: list[tuple[str, int]]) -> dict[str, slice]:
+    """Name -> slice of each entry of an observation's layout ([(name, size), ...], as `observation_layout()`
+    lists them), in order."""
+    out, start = {}, 0
+    for name, size in entries:
+        out[name], start = slice(start, start + size), start + size
+    return out
+
+
 class MjxEnv(Env, abc.ABC):
     """Brax Env over the four task verbs; `self.config` (ctrl_dt, n_substeps, divergence_qvel), `self.robot`,
     `self.mj_model` and `self.mjx_model` come from the subclass."""

@@ -14,7 +14,7 @@ import jax
 import jax.numpy as jnp
 from brax.envs.base import State
 
-from legged.envs.api import MjxEnv
+from legged.envs.api import MjxEnv, layout_slices
 from legged.envs.math import yaw_rotate
 from legged.envs.physics import PhysicsView, Spawn
 from legged.sensors.raycam import render
@@ -31,18 +31,10 @@ HEAD_PAN = 0
 """Index of the head pan joint in the OP3's joint actions (RobotSpec.joint_names)."""
 
 
-def _game_slices(players_per_team: int) -> dict[str, slice]:
-    """Named slices of the game features after the proprioception (legged.soccer.observe.feature_layout)."""
-    out, start = {}, 0
-    for name, size in feature_layout(players_per_team)[1:]:
-        out[name], start = slice(start, start + size), start + size
-    return out
-
-
 def estimate_parts(players_per_team: int) -> dict[str, slice]:
     """Positions in an estimate of the game features whose errors are reported and drawn: ball (x, y, z), own
     and opponent goal (x, y), the first other player's position (x, y; the teammate in 2v2)."""
-    parts = _game_slices(players_per_team)
+    parts = layout_slices(feature_layout(players_per_team)[1:])  # the game features after the proprioception
     first_other = list(parts.values())[4]
     return {"ball": parts["ball"], "own_goal": parts["own_goal"], "opponent_goal": parts["opponent_goal"],
             "first_other": slice(first_other.start, first_other.start + 2)}
@@ -152,9 +144,7 @@ class LearnerView(MjxEnv):
     @property
     def world_size(self) -> int:
         """Length of the learner's estimate of the game features among its actions (0 unless `estimates_world`)."""
-        if not self.estimates_world:
-            return 0
-        return sum(k for _, k in feature_layout(self.game.layout.players_per_team)) - PROPRIO_SIZE
+        return self.game.policy_state_size - PROPRIO_SIZE if self.estimates_world else 0
 
     def estimate_points(self, state: State, action: jax.Array) -> jax.Array:
         """World positions [4, 3] of what the learner's `action` estimates (`estimates_world`): the ball, its own
