@@ -121,6 +121,10 @@ def cmd_eval(args) -> int:
     soccer = task_entry(config.task).kind == "soccer"
     if (args.opponent or args.teammate) and not soccer:
         raise ValueError(f"--opponent (or --teammate) applies to soccer tasks; {config.task} has no opponents")
+    if config.drill and (args.opponent or args.teammate):
+        raise ValueError(f"{args.run_dir} trained on the {config.drill} drill, where nobody else plays: its eval "
+                         f"plays the drill, without --opponent or --teammate (or use `legged drill {config.drill} "
+                         f"--player {args.run_dir}`)")
     policy, config = load_policy(args.run_dir, args.checkpoint)
     report = dict(physics=args.physics, seed=args.seed, checkpoint=str(policy.checkpoint), trained_steps=policy.step,
                   task=config.task)
@@ -132,7 +136,9 @@ def cmd_eval(args) -> int:
         check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
         samples = []
         opponent = (soccer_opponent(args.opponent or "scripted", env),) if soccer else ()
-        if soccer:
+        if config.drill:  # nobody else plays
+            report["drill"] = config.drill
+        elif soccer:
             report["opponent"] = args.opponent or "scripted"
         if soccer and env.game.layout.players_per_team > 1:
             opponent += (soccer_opponent(args.teammate or "self", env, policy),)
@@ -245,7 +251,8 @@ def cmd_view(args) -> int:
 
     request = ViewRequest(run_dir=args.run_dir, task=args.task, checkpoint=args.checkpoint, trajectory=args.trajectory,
                           num_envs=args.num_envs, physics=args.physics, seed=args.seed, steps=args.steps, host=args.host,
-                          port=None if args.save else args.port, opponent=args.opponent)
+                          port=None if args.save else args.port, opponent=args.opponent,
+                          drill=args.drill)
     resolved = resolve(request, log=lambda msg: print(msg, flush=True))
     if args.save:
         if resolved.source is None:
@@ -457,6 +464,8 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--steps", type=bounded(int, 1, 100000), default=500, help="control steps per rollout (50 per second)")
     v.add_argument("--opponent", default=None, metavar="placo|scripted|RUN",
                    help="soccer: what drives the other robots (default: the standing script)")
+    v.add_argument("--drill", default=None, metavar="walk|empty-goal|getup",
+                   help="soccer: a drill (as `legged drill`) played by the run's policy, or without a run by placo")
     v.add_argument("--save", default=None, metavar="FILE.npz",
                    help="record one rollout into FILE.npz and exit instead of serving")
     _add_server_options(v)

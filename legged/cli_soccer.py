@@ -13,8 +13,11 @@ def cmd_drill(args) -> int:
 
     if args.drill not in DRILLS:
         raise ValueError(f"unknown drill {args.drill!r}; drills: {', '.join(DRILLS)}")
+    if args.checkpoint and args.player in ("placo", "script"):
+        raise ValueError(f"--checkpoint picks a checkpoint of a run; --player {args.player} has none")
     report = run_drill(args.drill, args.player, args.episodes, args.seed, args.physics, args.threads or None,
-                       randomize=args.randomize, progress=not args.quiet, num_envs=min(args.episodes, args.num_envs))
+                       randomize=args.randomize, progress=not args.quiet, num_envs=min(args.episodes, args.num_envs),
+                       checkpoint=args.checkpoint)
     print(json.dumps(report) if args.json else json.dumps(report, indent=2))
     return 0
 
@@ -27,6 +30,7 @@ def add_soccer_commands(sub) -> None:
     dr.add_argument("--player", default="placo", metavar="placo|script|RUN",
                     help="the placo player (default), ROBOTIS' scripted get-up (script: getup), a skill run "
                          "(op3-walk: walk, op3-getup: getup) or a soccer-1v1 run directory (empty-goal)")
+    dr.add_argument("--checkpoint", default=None, help="a checkpoint file of the --player run (default: its newest)")
     dr.add_argument("--episodes", type=bounded(int, 1, 100000), default=16)
     dr.add_argument("--seed", type=SEED, default=12345, help="seed of the drill episodes")
     dr.add_argument("--num-envs", type=bounded(int, 1, 4096), default=16, help="episodes run side by side")

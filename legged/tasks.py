@@ -132,7 +132,4 @@ def learner_env(entry: TaskEntry, env, activation: str = "elu", hidden: tuple[in
     from legged.soccer.learner import LearnerView
     from legged.soccer.opponents import OpponentNet
 
-    if walker is not None and abs(walker.dt - env.dt) > 1e-9:  # its gait clock would run at the wrong speed
-        raise ValueError(f"the walker was trained with env.ctrl_dt={walker.dt:g}; this game steps every "
-                         f"{env.dt:g} s: set env.ctrl_dt={walker.dt:g}")
     return LearnerView(env, OpponentNet(activation), hidden, walker, teacher_prior)

@@ -130,7 +130,11 @@ class DistillConfig:
     student_memory: int = 0
     """dagger vision students: size of a GRU memory between features and head (0: none; policies.memory_models)."""
     student_init: str = ""
-    """dagger vision students: an earlier vision student run whose camera encoder and normaliser this one starts from."""
+    """dagger vision students: an earlier vision student (its run directory's newest checkpoint, or a checkpoint
+    file in it) whose camera encoder and normaliser this one starts from."""
+    student_init_whole: bool = False
+    """With student_init: start from that student whole (encoder, memory, head, normaliser, noise), which must
+    fit this one, e.g. the second stage of a curriculum (the empty-goal drill first, then the game)."""
     teacher_act_fraction: float = 0.0
     """dagger: share of the environments the teacher acts in at first (DAgger's beta; the student learns on all)."""
     teacher_act_iterations: int = 0
@@ -170,6 +174,9 @@ class TrainConfig:
     """rsl backend: whenever training starts or resumes, each environment's episode clock starts at a random step
     of its time limit (rsl-rl's init_at_random_ep_len), so that episodes end on different iterations instead of
     all together (e.g. 512 soccer games of 60 s) and every rollout holds every phase of an episode."""
+    drill: str = ""
+    """Soccer-1v1 tasks, rsl backend: train on a drill (legged.soccer.drills) instead of the game: `empty-goal`
+    (the ball 1-2 m before the opponent goal, nobody defending, episodes end at a goal), or '' for the game."""
     device: str = "cpu"
     """PyTorch device of the rsl backend (cpu, cuda, cuda:1, ...)."""
     physics: Literal["mjx", "native"] = "mjx"
@@ -233,6 +240,8 @@ class TrainConfig:
                               "training step); train native physics with --backend rsl")
         if cfg.backend == "brax" and cfg.random_episode_start:
             raise ConfigError("random_episode_start is for --backend rsl (Brax PPO resets its environments itself)")
+        if cfg.drill:
+            _check_drill(cfg, entry)
         if cfg.threads < 0:
             raise ConfigError(f"threads must be >= 1 (or 0 for every core), got {cfg.threads}")
         for name in ("num_envs", "timesteps", "checkpoint_every"):
@@ -322,6 +331,19 @@ def _check_algo(cfg: TrainConfig, entry) -> TrainConfig:
     return dataclasses.replace(cfg, env=dataclasses.replace(cfg.env, history_steps=history))
 
 
+TRAINING_DRILLS = ("empty-goal",)
+"""Drills a run can train on (walk and getup measure skills whose commands or scripts its policy does not see)."""
+
+
+def _check_drill(cfg: TrainConfig, entry) -> None:
+    """ConfigError unless `cfg.drill` is a drill this run can train on."""
+    if cfg.drill not in TRAINING_DRILLS:
+        raise ConfigError(f"drill must be '' (the game) or one of {', '.join(TRAINING_DRILLS)}, got {cfg.drill!r}")
+    if entry.kind != "soccer" or cfg.env.scene.players_per_team != 1 or cfg.backend != "rsl":
+        raise ConfigError(f"drill={cfg.drill} trains a soccer-1v1 player (soccer-1v1 or soccer-1v1-vision) with the "
+                          f"rsl backend, not {cfg.task} with {cfg.backend}")
+
+
 def _check_distill(d: DistillConfig) -> None:
     """ConfigError naming the distillation settings outside their ranges."""
     if not (0 < d.learning_rate <= 1 and d.num_learning_epochs >= 1 and d.gradient_length >= 1
@@ -330,6 +352,8 @@ def _check_distill(d: DistillConfig) -> None:
         raise ConfigError(f"distill: learning_rate in (0, 1], num_learning_epochs and gradient_length >= 1, "
                           f"student_noise_std in (0, 10], kl_weight in [0, 1000], kl_decay in (0, 1], student_memory "
                           f"in [0, 4096], teacher_act_fraction in [0, 1], teacher_act_iterations >= 0; got {d}")
+    if d.student_init_whole and not d.student_init:
+        raise ConfigError("distill.student_init_whole takes the whole student of distill.student_init: name that run")
 
 
 def _check_ppo(ppo: PPOConfig) -> None:

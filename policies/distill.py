@@ -163,7 +163,9 @@ def load_teacher(config: TrainConfig, env) -> tuple[TrainConfig, dict]:
 def start_student(alg, config: TrainConfig, teacher: TrainConfig, payload: dict) -> None:
     """Load the teacher's actor into a new distillation; rma also takes the teacher's head and normaliser."""
     alg.load(payload["alg"], {"teacher": True}, strict=True)
-    if config.distill.student_init:
+    if config.distill.student_init_whole:
+        load_student_whole(alg.student, Path(config.distill.student_init))
+    elif config.distill.student_init:
         load_student_encoder(alg.student, Path(config.distill.student_init))
     if config.algo != "rma":
         return
@@ -178,24 +180,46 @@ def start_student(alg, config: TrainConfig, teacher: TrainConfig, payload: dict)
         p.requires_grad_(False)
 
 
-def check_student_init(run_path: Path) -> None:
-    """RunDirError unless `run_path` (`distill.student_init`) is a dagger vision student with a checkpoint."""
-    run = RunDir(run_path)
+def check_student_init(init: Path) -> Path:
+    """The checkpoint `distill.student_init` names: a run directory's newest, or a checkpoint file of a run
+    (RUN/checkpoints/step_N.pt); RunDirError unless its run is a dagger vision student with that checkpoint."""
+    file = init if init.suffix == ".pt" else None
+    run = RunDir(init.parent.parent if file is not None else init)
     source = run.load_config()  # RunDirError naming the path if it is not a run
     if source.algo != "dagger" or not getattr(source.env, "vision", False) or not run.checkpoints():
-        raise RunDirError(f"distill.student_init {run_path}: not a dagger vision student with a checkpoint (it "
+        raise RunDirError(f"distill.student_init {init}: not a dagger vision student with a checkpoint (it "
                           f"trained {source.task} with --algo {source.algo})")
+    if file is not None and not file.is_file():
+        raise RunDirError(f"distill.student_init {init}: no such checkpoint; {run.path} has "
+                          f"{', '.join(p.name for p in run.checkpoints())}")
+    return file if file is not None else run.latest_checkpoint()
+
+
+def load_student_whole(student: torch.nn.Module, run_path: Path) -> None:
+    """Start `student` as the student of `run_path` (`distill.student_init`, with `student_init_whole`): every
+    network and statistic; RunDirError naming the entries that do not fit."""
+    from policies.rsl_backend import load_checkpoint
+
+    source = load_checkpoint(check_student_init(run_path))["alg"]["student_state_dict"]
+    mine = student.state_dict()
+    wrong = sorted(k for k in set(mine) | set(source) if k not in mine or k not in source
+                   or tuple(source[k].shape) != tuple(mine[k].shape))
+    if wrong:
+        raise RunDirError(f"distill.student_init {run_path}: its student does not fit this one whole (missing or "
+                          f"differently shaped: {', '.join(wrong[:8])}{' ...' if len(wrong) > 8 else ''}); drop "
+                          f"distill.student_init_whole to take its camera encoder and normaliser only")
+    student.load_state_dict({k: torch.as_tensor(v) for k, v in source.items()}, strict=True)
 
 
 def load_student_encoder(student: torch.nn.Module, run_path: Path) -> None:
     """Start `student` with the camera encoder (`cnns.*`) and state normaliser (`obs_normalizer.*`) of the vision
-    student run `run_path` (`distill.student_init`); a state that grew at its end (e.g. `env.vision_heading`)
-    takes the normaliser's statistics of the entries both have, with its sample count capped so that the new
-    entries' statistics follow the data within a few iterations. RunDirError naming what does not fit."""
+    student `run_path` (`distill.student_init`: a run or one of its checkpoints); a state that grew at its end
+    (e.g. `env.vision_heading`) takes the normaliser's statistics of the entries both have, with its sample count
+    capped so that the new entries' statistics follow the data within a few iterations. RunDirError naming what
+    does not fit."""
     from policies.rsl_backend import load_checkpoint
 
-    check_student_init(run_path)
-    source = load_checkpoint(RunDir(run_path).latest_checkpoint())["alg"]["student_state_dict"]
+    source = load_checkpoint(check_student_init(run_path))["alg"]["student_state_dict"]
     mine = dict(student.state_dict())
     taken, wrong, grown = {}, [], False
     for key, value in source.items():

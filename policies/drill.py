@@ -10,7 +10,7 @@ import numpy as np
 from legged.soccer.drills import DrillConfig, DrillEnv
 from legged.soccer.skill_config import GetUpConfig
 from legged.soccer.task_config import SoccerConfig
-from policies.evaluate import evaluate
+from policies.evaluate import estimate_errors, evaluate
 from policies.policy_io import GETUP_SCRIPT as SCRIPT  # `--player script`: the get-up script open loop
 
 SKILL_DRILLS = {"op3-walk": "walk", "op3-getup": "getup"}
@@ -60,16 +60,26 @@ def check_player(spec: str, drill: DrillConfig) -> None:
                          f"policies are not trained for it")
 
 
-def drill_player(spec: str, env: DrillEnv):
-    """The player `--player` names (checked by `check_player`): `placo`, or a run whose policy plays agent 0."""
+def drill_player(spec: str, env: DrillEnv, checkpoint: str | None = None):
+    """The player `--player` names (checked by `check_player`): `placo`, or a run whose policy (its newest
+    checkpoint, or `checkpoint`) plays agent 0."""
     if spec in ("placo", SCRIPT):
         return BuiltInPlayer(env.action_size)
     from policies.policy_io import load_policy
     from policies.run_dir import check_compatible
 
-    policy, _ = load_policy(spec)
+    policy, _ = load_policy(spec, checkpoint)
     check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
     return policy
+
+
+def players_view(trained: SoccerConfig) -> SoccerConfig:
+    """The drills' game (SoccerConfig's defaults) with what a player trained on `trained` sees and how: its head
+    camera (size, lens, tilt), the vision flags (heading, gaze)."""
+    scene = dataclasses.replace(SoccerConfig().scene, head_camera_tilt_deg=trained.scene.head_camera_tilt_deg,
+                                head_camera_fovy_deg=trained.scene.head_camera_fovy_deg)
+    return dataclasses.replace(SoccerConfig(), vision=trained.vision, camera=trained.camera, scene=scene,
+                               vision_heading=trained.vision_heading, vision_gaze=trained.vision_gaze)
 
 
 def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
@@ -93,24 +103,29 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
         from policies.policy_io import load_walker
 
         walker = load_walker(run.walker, run.getup, run.command_prior)
-    game = SoccerConfig() if run is None else dataclasses.replace(  # a vision player sees through its own camera
-        SoccerConfig(), vision=run.env.vision, camera=run.env.camera, vision_heading=run.env.vision_heading)
+    game = SoccerConfig() if run is None else players_view(run.env)
     return DrillEnv(drill, with_randomization(game), placo=player == "placo", walker=walker,
                     teacher_prior=run is not None and run.distill.teacher_prior)  # a vision student's observations
 
 
 def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "native", threads: int | None = None,
-              randomize: bool = False, progress: bool = True, num_envs: int = 16) -> dict:
-    """Run `episodes` episodes of drill `name` with `player`; returns its figures (see legged.soccer.drills)."""
+              randomize: bool = False, progress: bool = True, num_envs: int = 16,
+              checkpoint: str | None = None) -> dict:
+    """Run `episodes` episodes of drill `name` with `player` (a run: its newest checkpoint, or `checkpoint`);
+    returns its figures (see legged.soccer.drills)."""
     drill = DrillConfig(name=name)
     check_player(player, drill)
     env = drill_env(player, drill, randomize)
-    policy = drill_player(player, env)
+    policy = drill_player(player, env, checkpoint)
     finals = evaluate(env, policy, episodes, seed, physics, num_envs, threads, progress=progress)
+    errors = estimate_errors(finals)  # a vision player that estimates the game
     fell = np.array([f["fell"] > 0 for f in finals])
-    report = {"drill": name, "player": player, "episodes": len(finals), "physics": physics, "seed": seed,
-              "randomized": randomize, "fall_rate": float(fell.mean()),
+    played = str(policy.checkpoint) if hasattr(policy, "checkpoint") else None  # a run's checkpoint
+    report = {"drill": name, "player": player, "checkpoint": played, "episodes": len(finals), "physics": physics,
+              "seed": seed, "randomized": randomize, "fall_rate": float(fell.mean()),
               "episode_seconds": float(np.mean([f["time_s"] for f in finals]))}
+    if errors:
+        report["estimate_rms_m"] = errors
     if name == "walk":
         walk = ("speed_mps", "tracking_error_mps", "smoothed_tracking_error_mps", "smoothed_yaw_rate_error_radps")
         report.update({k: float(np.mean([f[k] for f in finals])) for k in walk})

@@ -39,6 +39,13 @@ def ood_config(env_config):
         push_velocity=1.5 * r.push_velocity))
 
 
+def estimate_errors(finals: list[dict]) -> dict:
+    """A vision player that estimates the game: the RMS position errors of its estimate (metres) by part, averaged
+    over the episodes; {} for other players."""
+    estimates = sorted(k for k in finals[0] if k.startswith("estimate_"))
+    return {k[9:-2]: float(np.mean([f[k] for f in finals])) for k in estimates}
+
+
 def summarize(finals: list[dict], confined: bool) -> dict:
     """Task metrics over finished episodes (`finals`: each episode's statistics at its last step)."""
     out = {"episodes": len(finals), "episode_return": float(np.mean([f["return"] for f in finals])),
@@ -54,9 +61,9 @@ def summarize(finals: list[dict], confined: bool) -> dict:
         goals_against = np.array([f["goals_against"] for f in finals])
         out.update(goals_for_per_episode=float(goals_for.mean()), goals_against_per_episode=float(goals_against.mean()),
                    win_rate=float((goals_for > goals_against).mean()))
-    estimates = sorted(k for k in finals[0] if k.startswith("estimate_"))
-    if estimates:  # a vision player that estimates the game: RMS position errors, metres
-        out["estimate_rms_m"] = {k[9:-2]: float(np.mean([f[k] for f in finals])) for k in estimates}
+    errors = estimate_errors(finals)
+    if errors:
+        out["estimate_rms_m"] = errors
     if confined:
         success = np.array([f["success"] > 0 for f in finals])
         out["success_rate"] = float(success.mean())

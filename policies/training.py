@@ -12,21 +12,26 @@ from policies.run_dir import RunDir
 def build_env(config: TrainConfig, progress: bool = True):
     """The run's environment as its registry entry says: confined tasks on traversable worlds with planned
     waypoints; soccer tasks as the learner's view of the game (agent 0; the others driven by opponents
-    given to each step), commanding `config.walker` when it names one."""
+    given to each step) or of `config.drill`, commanding `config.walker` when it names one."""
     from legged.tasks import learner_env, make, task_entry
 
     entry = task_entry(config.task)
+    walker = None
+    if config.walker:
+        from policies.policy_io import load_walker
+
+        walker = load_walker(config.walker, config.getup, config.command_prior)
+    if config.drill:  # one player on the pitch doing the drill, the other parked (no opponent to hand it)
+        from legged.soccer.drills import DrillConfig, DrillEnv
+
+        return DrillEnv(DrillConfig(name=config.drill), config.env, walker=walker,
+                        teacher_prior=config.distill.teacher_prior)
     if entry.kind == "confined":
         from planners import make_planned_env
 
         env = make_planned_env(config.task, config=config.env, progress=progress)
     else:
         env = make(config.task, config.env)
-    walker = None
-    if config.walker:
-        from policies.policy_io import load_walker
-
-        walker = load_walker(config.walker, config.getup, config.command_prior)
     return learner_env(entry, env, config.ppo.activation, config.ppo.actor_hidden, walker,
                        config.distill.teacher_prior)
 

@@ -210,6 +210,9 @@ def test_view_errors_name_the_cause_before_long_work(tmp_path):
     port = free_port()
     assert "run directory not found" in _view_error(str(tmp_path / "nope"), "--port", str(port))
     assert "unknown task 'nope'" in _view_error("--task", "nope", "--port", str(port))
+    assert "unknown drill 'nope'" in _view_error("--drill", "nope", "--port", str(port))
+    assert "the walk drill needs placo or an op3-walk run" in _view_error(str(VISION_STUDENT), "--drill", "walk",
+                                                                          "--port", str(port))
     run = tmp_path / "run"
     (run / "checkpoints").mkdir(parents=True)
     shutil.copy(ROOT / "assets/runs/go1-flat-rsl-cpu2/config.yaml", run / "config.yaml")
@@ -311,13 +314,14 @@ def test_dashboard_in_headless_chromium(recorded, tmp_path):
 
 
 @pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (CI installs it: .ci/install)")
-def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
-    """A vision student's rollout (a trained one that estimates the game) shows its head camera in the Camera
-    tab, and its estimate of the ball, goals and opponent as an overlay."""
+@pytest.mark.parametrize("drill", [[], ["--drill", "empty-goal"]], ids=["game", "empty-goal drill"])
+def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path, drill):
+    """A vision student's rollout (a trained one that estimates the game), in the game or a drill, shows its
+    head camera in the Camera tab, and its estimate of the ball, goals and opponent as an overlay."""
     playwright = pytest.importorskip("playwright.sync_api", reason="playwright is a dev dependency")
     port = free_port()
     command = [sys.executable, "-m", "legged.cli", "view", str(VISION_STUDENT), "--physics", "native",
-               "--steps", "10", "--port", str(port)]
+               "--steps", "10", "--port", str(port), *drill]
     proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             env={**os.environ, "PYTHONUNBUFFERED": "1"})
     try:

@@ -78,6 +78,7 @@ def test_drill_and_opponent_errors_are_one_line(tmp_path, capsys):
     cases = [(["drill", "dribble"], "unknown drill 'dribble'"),
              (["drill", "walk", "--player", str(tmp_path / "none")], "is not a run directory"),
              (["drill", "empty-goal", "--player", str(flat.path)], "not go1-flat"),
+             (["drill", "walk", "--checkpoint", str(tmp_path / "step_1.pt")], "--player placo has none"),
              (["eval", str(flat.path), "--opponent", "placo"], "applies to soccer tasks")]
     for argv, message in cases:
         assert main(argv) == 2

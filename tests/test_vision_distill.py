@@ -200,14 +200,62 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
     student, scfg = load_policy(tmp_path / "student")
     assert scfg.estimates_world and not scfg.distill.teacher_prior and student.num_actions == 17
     report = run_drill("empty-goal", str(tmp_path / "student"), episodes=1, seed=0, threads=1, progress=False,
-                       num_envs=1)
-    assert report["episodes"] == 1
+                       num_envs=1, checkpoint=str(RunDir(tmp_path / "student").latest_checkpoint()))
+    assert report["episodes"] == 1 and report["checkpoint"].endswith(".pt")
+    assert sorted(report["estimate_rms_m"]) == ["ball", "first_other", "opponent_goal", "own_goal"]
     capsys.readouterr()
     assert main(["eval", str(tmp_path / "student"), "--opponent", "placo", "--episodes", "1", "--num-envs", "1",
                  "--physics", "native", "--threads", "1", "--json"]) == 0
     errors = json.loads(capsys.readouterr().out)["estimate_rms_m"]  # how far its estimate was from the truth
     assert sorted(errors) == ["ball", "first_other", "opponent_goal", "own_goal"]
     assert all(0.0 < e < 100.0 for e in errors.values())
+
+
+def test_a_curriculum_distils_on_the_empty_goal_drill_then_takes_that_student_whole(placo_teacher, tmp_path, capsys):
+    from legged.soccer.drills import DrillConfig, DrillEnv
+    from policies.distill import start_distill
+    from policies.drill import drill_env
+    from policies.rsl_backend import load_checkpoint
+    from policies.training import build_env
+
+    student = ["command_prior=placo", "env.vision_gaze=true", "env.scene.head_camera_fovy_deg=70"]
+    sets = lambda extra: sum((["--set", o] for o in student + extra), [])
+    distill = ["distill", str(placo_teacher), "--method", "dagger", "--task", "soccer-1v1-vision", "--run-dir"]
+    for extra, message in ((["drill=walk"], "drill must be ''"),
+                           (["distill.student_init_whole=true"], "name that run")):
+        assert main(distill + [str(tmp_path / "bad"), *sets(extra)]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
+    drill = tmp_path / "drill"
+    record = start_distill(str(placo_teacher), "dagger", str(drill), timesteps=16, progress=False,
+                           task="soccer-1v1-vision", overrides=student + ["drill=empty-goal"])
+    assert record["step"] == 16 and np.isfinite(record["loss_behavior"])
+    env = build_env(RunDir(drill).load_config())
+    assert isinstance(env, DrillEnv) and env.drill.name == "empty-goal" and env.config.end_on_goal
+    seen = drill_env(str(drill), DrillConfig(name="empty-goal"), randomize=False)  # `legged drill` sees as it learned
+    assert seen.config.vision_gaze and seen.config.scene.head_camera_fovy_deg == 70.0
+    assert main(["eval", str(drill), "--opponent", "placo", "--episodes", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "nobody else plays" in err and err.count("\n") == 1, err
+
+    assert main(distill + [str(tmp_path / "bad"), *sets([f"distill.student_init={drill}/checkpoints/step_9.pt"])]) == 2
+    err = capsys.readouterr().err
+    assert "no such checkpoint" in err and err.count("\n") == 1, err
+    whole = tmp_path / "whole"  # the second stage, in the game, starts as the drill's student (and barely moves)
+    start_distill(str(placo_teacher), "dagger", str(whole), timesteps=8, progress=False, task="soccer-1v1-vision",
+                  overrides=student + [f"distill.student_init={RunDir(drill).latest_checkpoint()}",
+                                       "distill.student_init_whole=true", "distill.learning_rate=1e-12"])
+    assert build_env(RunDir(whole).load_config()).__class__.__name__ == "LearnerView"
+    before, after = (load_checkpoint(RunDir(run).latest_checkpoint())["alg"]["student_state_dict"]
+                     for run in (drill, whole))
+    assert sorted(before) == sorted(after)
+    for key in before:
+        if not key.startswith("obs_normalizer."):  # the normaliser's statistics follow the new data
+            torch.testing.assert_close(after[key], before[key], atol=1e-6, rtol=0)
+    assert main(distill + [str(tmp_path / "memory"), *sets([f"distill.student_init={drill}", "distill.student_memory=8",
+                                                          "distill.student_init_whole=true"])]) == 2
+    err = capsys.readouterr().err
+    assert "does not fit this one whole" in err and err.count("\n") == 1, err
 
 
 def test_dagger_beta_falls_linearly_to_zero():

@@ -173,6 +173,10 @@ def test_a_walker_must_step_at_the_games_control_rate():
     layers = [(np.zeros((PROPRIO_SIZE + 8, 20)), np.zeros(20))]
     with pytest.raises(ValueError, match="set env.ctrl_dt=0.025"):
         learner_env(task_entry("soccer-1v1"), game, walker=_walker(layers))
+    from legged.soccer.drills import DrillConfig, DrillEnv
+
+    with pytest.raises(ValueError, match="set env.ctrl_dt=0.025"):  # a drill the player trains on, too
+        DrillEnv(DrillConfig(name="empty-goal"), game.config, walker=_walker(layers))
 
 
 def test_a_walker_must_be_an_op3_walk_run(tmp_path):

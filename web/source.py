@@ -45,6 +45,9 @@ class ViewRequest:
     """Port the server binds to (0: any free port; None: no server, e.g. when only recording)."""
     opponent: str | None = None
     """Soccer: what drives the other robots: placo, scripted (the default) or a soccer run directory."""
+    drill: str | None = None
+    """A soccer drill (walk, empty-goal, getup; legged.soccer.drills) played by the run's policy, or without a
+    run by the placo player."""
 
 
 def check_port(host: str, port: int) -> None:
@@ -65,17 +68,19 @@ class RolloutSource:
     """An environment, its recorder and the current policy (or the default controller): what is re-recorded."""
 
     def __init__(self, env, task: str, recorder: RecorderConfig = RecorderConfig(), policy=None,
-                 run_dir: Path | None = None, opponent: tuple[str, object] | None = None):
-        """opponent: (name, legged.soccer.opponents.Opponent) driving the other robots of a soccer game."""
-        self.env, self.task, self.run_dir = env, task, run_dir
+                 run_dir: Path | None = None, opponent: tuple[str, object] | None = None,
+                 builtin: str = "default controller"):
+        """opponent: (name, legged.soccer.opponents.Opponent) driving the other robots of a soccer game;
+        builtin: what acts without a policy (the environment's default controller, or e.g. the placo player)."""
+        self.env, self.task, self.run_dir, self.builtin = env, task, run_dir, builtin
         self.opponent_name = None if opponent is None else opponent[0]
         self.recorder = Recorder(env, task, recorder, () if opponent is None else (opponent[1],))
         self.policy = policy
 
     @property
     def policy_name(self) -> str:
-        """The checkpoint's file name, or 'default controller'."""
-        return "default controller" if self.policy is None else self.policy.checkpoint.name
+        """The checkpoint's file name, or what acts without one (`builtin`)."""
+        return self.builtin if self.policy is None else self.policy.checkpoint.name
 
     def checkpoints(self) -> list[Path]:
         """Checkpoints of the run directory, oldest first (none without a run)."""
@@ -152,6 +157,8 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
         check_port(request.host, request.port)
     if request.opponent is not None and request.trajectory is not None:
         raise ValueError("--opponent plays a new rollout; it cannot be combined with --trajectory")
+    if request.drill is not None:
+        return _resolve_drill(request, log)
     run_dir = _run_dir_of(request)
     config = None
     if run_dir is not None:
@@ -171,6 +178,9 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
 
         if task_entry(task).kind != "soccer":
             raise ValueError(f"--opponent applies to soccer tasks; {task} has no opponents")
+        if config is not None and config.drill:
+            raise ValueError(f"run {run_dir} trained on the {config.drill} drill, where nobody else plays: "
+                             f"drop --opponent")
     policy = None
     if run_dir is not None and (request.checkpoint is not None or _has_checkpoints(run_dir)):
         from policies.policy_io import load_policy
@@ -190,6 +200,38 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
         opponent = (request.opponent, soccer_opponent(request.opponent, env))
     source = RolloutSource(env, task, RecorderConfig(num_envs=request.num_envs, physics=request.physics), policy,
                            run_dir, opponent)
+    return Resolved(source=source, trajectory=None, run_dir=run_dir)
+
+
+def _resolve_drill(request: ViewRequest, log: Callable[[str], None]) -> Resolved:
+    """`legged view [RUN] --drill NAME`: the drill as `legged drill NAME --player RUN|placo` plays it."""
+    from legged.soccer.drills import DRILLS, DrillConfig
+    from policies.drill import check_player, drill_env
+
+    if request.drill not in DRILLS:
+        raise ValueError(f"unknown drill {request.drill!r}; drills: {', '.join(DRILLS)}")
+    if request.trajectory is not None or request.opponent is not None or request.task is not None:
+        raise ValueError("--drill plays a new rollout of one player: it cannot be combined with --trajectory, "
+                         "--opponent or --task")
+    run_dir = _run_dir_of(request)
+    drill, player = DrillConfig(name=request.drill), "placo" if run_dir is None else str(run_dir)
+    check_player(player, drill)  # the run can do this drill (and is a run), before anything is built
+    policy = None
+    if run_dir is not None:
+        from policies.policy_io import load_policy
+
+        policy, config = load_policy(run_dir, request.checkpoint)
+        log(f"[view] policy {policy.checkpoint} ({policy.backend}, {policy.step} env steps)")
+    log(f"[view] building the {request.drill} drill ...")
+    env = drill_env(player, drill, randomize=False)
+    task = "soccer-1v1" if run_dir is None else config.task
+    if policy is not None:
+        from policies.run_dir import check_compatible
+
+        check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+    source = RolloutSource(env, f"{task} ({request.drill} drill)",
+                           RecorderConfig(num_envs=request.num_envs, physics=request.physics), policy, run_dir,
+                           builtin="placo player")
     return Resolved(source=source, trajectory=None, run_dir=run_dir)
 
 

@@ -149,8 +149,9 @@ class DrillEnv(LearnerView):
         segment = jnp.minimum(info["step"] * self.dt // self.drill.command_seconds, self._segments - 1)
         return info["commands"][segment.astype(jnp.int32)]
 
-    def prepare(self, state: State, action: jax.Array):
-        """Controls: agent 0 from the given action (or the placo player), the parked robot at rest."""
+    def prepare(self, state: State, action: jax.Array, opponent=None, teammate=None):
+        """Controls: agent 0 from the given action (or the placo player), the parked robot at rest (a trainer's
+        `opponent` and `teammate` are ignored: nobody else plays)."""
         memory, walker_state = state.info["players"], state.info["walker_state"]
         estimate_sq = None if self.placo else self._estimate_sq(state, action)
         if self.placo:
@@ -187,7 +188,7 @@ class DrillEnv(LearnerView):
         """Agent 0's share of the game State, with the drill's metrics."""
         mine = super()._view(game)
         steps = jnp.maximum(mine.info["step"], 1).astype(jnp.float32)
-        metrics = {"fell": mine.metrics["fell"], "goals_for": mine.metrics["goals_for"],
+        metrics = {**mine.metrics,  # the game's (goals, falls, rewards, a vision player's estimate errors)
                    "speed_mps": mine.info["speed_sum"] / steps, "tracking_error_mps": mine.info["error_sum"] / steps,
                    "smoothed_tracking_error_mps": mine.info["smoothed_error_sum"] / steps,
                    "smoothed_yaw_rate_error_radps": mine.info["yaw_error_sum"] / steps,

@@ -57,6 +57,9 @@ class LearnerView(MjxEnv):
         if teacher_prior and (walker is None or not game.config.vision):
             raise ValueError("teacher_prior (the placo command a vision student's teacher corrected) needs a walker "
                              "and a vision game")
+        if walker is not None and abs(walker.dt - game.dt) > 1e-9:  # its gait clock would run at the wrong speed
+            raise ValueError(f"the walker was trained with env.ctrl_dt={walker.dt:g}; this game steps every "
+                             f"{game.dt:g} s: set env.ctrl_dt={walker.dt:g}")
         self.estimates_world = walker is not None and walker.prior is not None and game.config.vision
         if teacher_prior and self.estimates_world:
             raise ValueError("teacher_prior (the placo command given as an observation) is for a vision student that "
