@@ -135,8 +135,9 @@ def cmd_eval(args) -> int:
         env = build_env(dataclasses.replace(config, env=ood_config(env_config) if args.ood else env_config))
         check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
         samples = []
-        opponent = (soccer_opponent(args.opponent or "scripted", env),) if soccer else ()
-        if config.drill:  # nobody else plays
+        game = soccer and not config.drill  # a drill: nobody else plays
+        opponent = (soccer_opponent(args.opponent or "scripted", env),) if game else ()
+        if config.drill:
             report["drill"] = config.drill
         elif soccer:
             report["opponent"] = args.opponent or "scripted"

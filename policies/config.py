@@ -217,9 +217,9 @@ class TrainConfig:
 
     @property
     def self_play(self) -> bool:
-        """Whether this run trains against snapshots of itself (soccer, rsl backend, state observations)."""
+        """Whether this run trains against snapshots of itself (soccer games, rsl backend, state observations)."""
         entry = task_entry(self.task)
-        if entry.kind != "soccer" or self.selfplay.opponent == "scripted":
+        if entry.kind != "soccer" or self.selfplay.opponent == "scripted" or self.drill:
             return False
         return self.backend == "rsl" and not entry.vision
 

@@ -163,7 +163,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                             seed=config.seed + launch.rank + 7919 * iteration)
         if payload is not None and "opponent_pool" in payload:
             pool.load_state_dict(payload["opponent_pool"])
-    elif task_entry(config.task).kind == "soccer":  # without self-play: the configured script plays every game
+    elif task_entry(config.task).kind == "soccer" and not config.drill:  # the configured script plays every game
         from policies.selfplay import script_opponents
 
         venv.env_args = script_opponents(config.selfplay, env.game.policy_state_size, env.player_action_size,

@@ -230,6 +230,7 @@ def test_a_curriculum_distils_on_the_empty_goal_drill_then_takes_that_student_wh
     record = start_distill(str(placo_teacher), "dagger", str(drill), timesteps=16, progress=False,
                            task="soccer-1v1-vision", overrides=student + ["drill=empty-goal"])
     assert record["step"] == 16 and np.isfinite(record["loss_behavior"])
+    assert not TrainConfig(task="soccer-1v1", drill="empty-goal").resolved().self_play  # nobody else plays a drill
     env = build_env(RunDir(drill).load_config())
     assert isinstance(env, DrillEnv) and env.drill.name == "empty-goal" and env.config.end_on_goal
     seen = drill_env(str(drill), DrillConfig(name="empty-goal"), randomize=False)  # `legged drill` sees as it learned

@@ -183,10 +183,7 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
                              f"drop --opponent")
     policy = None
     if run_dir is not None and (request.checkpoint is not None or _has_checkpoints(run_dir)):
-        from policies.policy_io import load_policy
-
-        policy, _ = load_policy(run_dir, request.checkpoint)
-        log(f"[view] policy {policy.checkpoint} ({policy.backend}, {policy.step} env steps)")
+        policy = _load_policy(run_dir, request.checkpoint, log)
     log(f"[view] building the {task} environment ...")
     env = _build_env(task, config)
     if policy is not None:
@@ -203,10 +200,20 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
     return Resolved(source=source, trajectory=None, run_dir=run_dir)
 
 
+def _load_policy(run_dir: Path, checkpoint: str | None, log: Callable[[str], None]):
+    """The run's policy (its newest checkpoint, or `checkpoint`), announced."""
+    from policies.policy_io import load_policy
+
+    policy, _ = load_policy(run_dir, checkpoint)
+    log(f"[view] policy {policy.checkpoint} ({policy.backend}, {policy.step} env steps)")
+    return policy
+
+
 def _resolve_drill(request: ViewRequest, log: Callable[[str], None]) -> Resolved:
     """`legged view [RUN] --drill NAME`: the drill as `legged drill NAME --player RUN|placo` plays it."""
     from legged.soccer.drills import DRILLS, DrillConfig
     from policies.drill import check_player, drill_env
+    from policies.run_dir import RunDir
 
     if request.drill not in DRILLS:
         raise ValueError(f"unknown drill {request.drill!r}; drills: {', '.join(DRILLS)}")
@@ -216,15 +223,10 @@ def _resolve_drill(request: ViewRequest, log: Callable[[str], None]) -> Resolved
     run_dir = _run_dir_of(request)
     drill, player = DrillConfig(name=request.drill), "placo" if run_dir is None else str(run_dir)
     check_player(player, drill)  # the run can do this drill (and is a run), before anything is built
-    policy = None
-    if run_dir is not None:
-        from policies.policy_io import load_policy
-
-        policy, config = load_policy(run_dir, request.checkpoint)
-        log(f"[view] policy {policy.checkpoint} ({policy.backend}, {policy.step} env steps)")
+    policy = None if run_dir is None else _load_policy(run_dir, request.checkpoint, log)
     log(f"[view] building the {request.drill} drill ...")
     env = drill_env(player, drill, randomize=False)
-    task = "soccer-1v1" if run_dir is None else config.task
+    task = "soccer-1v1" if run_dir is None else RunDir(run_dir).load_config().task
     if policy is not None:
         from policies.run_dir import check_compatible
 

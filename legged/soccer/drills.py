@@ -149,9 +149,8 @@ class DrillEnv(LearnerView):
         segment = jnp.minimum(info["step"] * self.dt // self.drill.command_seconds, self._segments - 1)
         return info["commands"][segment.astype(jnp.int32)]
 
-    def prepare(self, state: State, action: jax.Array, opponent=None, teammate=None):
-        """Controls: agent 0 from the given action (or the placo player), the parked robot at rest (a trainer's
-        `opponent` and `teammate` are ignored: nobody else plays)."""
+    def prepare(self, state: State, action: jax.Array):
+        """Controls: agent 0 from the given action (or the placo player), the parked robot at rest."""
         memory, walker_state = state.info["players"], state.info["walker_state"]
         estimate_sq = None if self.placo else self._estimate_sq(state, action)
         if self.placo:
