@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import types
 import typing
 from typing import Any, Literal
@@ -139,10 +140,19 @@ class DistillConfig:
     """dagger: share of the environments the teacher acts in at first (DAgger's beta; the student learns on all)."""
     teacher_act_iterations: int = 0
     """dagger: iterations over which `teacher_act_fraction` falls linearly to 0 (0: it stays)."""
+    label_weights: dict[str, float] = dataclasses.field(default_factory=dict)
+    """dagger students that estimate the game (command_prior=placo): weights of named groups of their labels in
+    the behaviour loss (`corrections`, `ball`, `ball_vel`, `own_goal`, `opponent_goal`, `teammate0`,
+    `opponent0`, ...; groups not listed weigh 1, but the opponents weigh 0 in the empty-goal drill, which has
+    none). A mapping: this config is not hashable."""
+    correction_margin: float = math.inf
+    """Students that estimate the game: their corrections' labels are the teacher's command clipped to [-1 - this,
+    1 + this] less the placo command at the truth (inf: the raw corrections; 0: as the walker clips)."""
     teacher_prior: bool = False
     """Set by `legged distill`: the teacher (a state soccer player, command_prior=placo) corrected the placo
-    player's command, which its vision student's game then gives as the observation `command_prior` (unless the
-    student has command_prior=placo itself and estimates the game: TrainConfig.estimates_world)."""
+    player's command, which its vision student's game then gives as the observation `command_prior` (a student
+    that estimates the game, TrainConfig.estimates_world, does not read it: its teacher's labels are clipped by
+    it, see correction_margin)."""
 
 
 ALGOS = ("ppo", "teacher", "hib", "hib-no-ib", "history", "dagger", "rma", "kl")
@@ -297,6 +307,8 @@ def _check_algo(cfg: TrainConfig, entry) -> TrainConfig:
         raise ConfigError(f"command_prior=placo on a vision task makes the player estimate the ball, goals and "
                           f"opponent as actions, which only a dagger student learns (legged distill ... --method "
                           f"dagger), not --algo {cfg.algo}")
+    if d.label_weights:
+        _check_label_weights(cfg)
     if d.teacher_act_fraction and cfg.algo != "dagger":
         raise ConfigError(f"distill.teacher_act_fraction (DAgger's beta) is for --method dagger, not {cfg.algo}")
     if cfg.algo == "ppo":
@@ -344,14 +356,32 @@ def _check_drill(cfg: TrainConfig, entry) -> None:
                           f"rsl backend, not {cfg.task} with {cfg.backend}")
 
 
+def _check_label_weights(cfg: TrainConfig) -> None:
+    """ConfigError unless `distill.label_weights` names label groups of this student with weights >= 0."""
+    from legged.soccer.learner import label_groups
+
+    if not cfg.estimates_world or cfg.algo != "dagger":
+        raise ConfigError("distill.label_weights weighs the labels of a dagger student that estimates the game "
+                          "(legged distill ... --task soccer-1v1-vision --method dagger --set command_prior=placo)")
+    groups = label_groups(cfg.env.scene.players_per_team)
+    unknown = sorted(set(cfg.distill.label_weights) - set(groups))
+    if unknown:
+        raise ConfigError(f"distill.label_weights: no label group(s) {unknown}; the groups are {', '.join(groups)}")
+    bad = {k: w for k, w in cfg.distill.label_weights.items() if not 0.0 <= w <= 1e3}
+    if bad:
+        raise ConfigError(f"distill.label_weights must be in [0, 1000], got {bad}")
+
+
 def _check_distill(d: DistillConfig) -> None:
     """ConfigError naming the distillation settings outside their ranges."""
     if not (0 < d.learning_rate <= 1 and d.num_learning_epochs >= 1 and d.gradient_length >= 1
             and 0 < d.student_noise_std <= 10 and 0 <= d.kl_weight <= 1e3 and 0 < d.kl_decay <= 1
-            and 0 <= d.student_memory <= 4096 and 0 <= d.teacher_act_fraction <= 1 and d.teacher_act_iterations >= 0):
+            and 0 <= d.student_memory <= 4096 and 0 <= d.teacher_act_fraction <= 1 and d.teacher_act_iterations >= 0
+            and d.correction_margin >= 0):
         raise ConfigError(f"distill: learning_rate in (0, 1], num_learning_epochs and gradient_length >= 1, "
                           f"student_noise_std in (0, 10], kl_weight in [0, 1000], kl_decay in (0, 1], student_memory "
-                          f"in [0, 4096], teacher_act_fraction in [0, 1], teacher_act_iterations >= 0; got {d}")
+                          f"in [0, 4096], teacher_act_fraction in [0, 1], teacher_act_iterations >= 0, "
+                          f"correction_margin >= 0; got {d}")
     if d.student_init_whole and not d.student_init:
         raise ConfigError("distill.student_init_whole takes the whole student of distill.student_init: name that run")
 
@@ -389,6 +419,8 @@ def to_dict(obj) -> dict:
             return {f.name: plain(getattr(v, f.name)) for f in dataclasses.fields(v)}
         if isinstance(v, (tuple, list)):
             return [plain(x) for x in v]
+        if isinstance(v, dict):  # a copy: overrides must not reach the frozen config's mapping
+            return {k: plain(x) for k, x in v.items()}
         return v
     return plain(obj)
 
@@ -411,6 +443,14 @@ def _convert(kind, value, path: str):
         for option in typing.get_args(kind):
             if option is not type(None):
                 return _convert(option, value, path)
+    if origin is dict:
+        if not isinstance(value, dict):
+            raise ConfigError(f"{path}: expected a mapping such as {{ball: 4}}, got {value!r}")
+        if any(v is None or isinstance(v, bool) for v in value.values()):
+            raise ConfigError(f"{path}: expected numbers, got {value!r} (YAML needs a space after each colon: "
+                              f"{{ball: 4}})")
+        key, item = typing.get_args(kind)
+        return {_convert(key, k, path): _convert(item, v, f"{path}.{k}") for k, v in value.items()}
     if kind is bool:
         if isinstance(value, str):
             if value.lower() not in ("true", "false", "1", "0"):
@@ -435,6 +475,10 @@ def from_dict(cls, data: dict, path: str = ""):
     return cls(**{k: _convert(hints[k], v, f"{path}{k}") for k, v in data.items()})
 
 
+MAPPINGS = ("distill.label_weights",)
+"""Config fields that are mappings: `--set distill.label_weights.ball=4` sets one entry."""
+
+
 def apply_overrides(config: TrainConfig, overrides: list[str]) -> TrainConfig:
     """Apply `a.b.c=value` overrides (e.g. `ppo.learning_rate=3e-4`, `env.episode_seconds=10`)."""
     data = to_dict(config)
@@ -447,7 +491,7 @@ def apply_overrides(config: TrainConfig, overrides: list[str]) -> TrainConfig:
             if not isinstance(node.get(key), dict):
                 raise ConfigError(f"override {item!r}: {key!r} is not a config section")
             node = node[key]
-        if keys[-1] not in node:
+        if keys[-1] not in node and ".".join(keys[:-1]) not in MAPPINGS:  # a mapping takes new keys
             raise ConfigError(f"override {item!r}: no field {keys[-1]!r} (fields: {', '.join(sorted(node))})")
         node[keys[-1]] = yaml.safe_load(text) if text else text
     return load_config(data)

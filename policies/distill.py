@@ -48,15 +48,52 @@ def teacher_share(fraction: float, iterations: int, done: int) -> float:
     return fraction * max(0.0, 1.0 - done / iterations)
 
 
+class GroupedLoss:
+    """Behaviour loss over named groups of labels: the mean over steps and labels of `weights` x the squared
+    error (all weights 1: F.mse_loss); it keeps each group's unweighted mean squared error for the report."""
+
+    def __init__(self, groups: dict[str, tuple[int, int]], weights: list[float]):
+        self.groups, self.weights = groups, torch.as_tensor(weights, dtype=torch.float32)
+        self.sums, self.count = torch.zeros(len(weights)), 0
+
+    def __call__(self, actions: torch.Tensor, labels: torch.Tensor) -> torch.Tensor:
+        if actions.shape[-1] != len(self.weights):
+            raise ValueError(f"{actions.shape[-1]} actions but {len(self.weights)} label weights")
+        squared = (actions - labels) ** 2
+        self.sums += squared.detach().reshape(-1, squared.shape[-1]).mean(0).cpu()
+        self.count += 1
+        return (squared * self.weights.to(squared.device)).mean()
+
+    def report(self) -> dict[str, float]:
+        """Each group's mean squared error since the last report (`behavior_<group>`), then a fresh start."""
+        means = self.sums / max(self.count, 1)
+        out = {f"behavior_{name}": means[a:b].mean().item() for name, (a, b) in self.groups.items()}
+        self.sums, self.count = torch.zeros_like(self.sums), 0
+        return out
+
+
 class MixedDAgger(Distillation):
     """rsl-rl's Distillation (DAgger: the student acts, the teacher labels every step) in which, at first, the
     teacher acts in a share of the environments (DAgger's beta, Ross et al. 2011): `teacher_act_fraction` of
     them, falling linearly to none over `teacher_act_iterations` (0: the share stays). The student learns on
-    every step either way; the teacher's share shows it the states of a game played well."""
+    every step either way; the teacher's share shows it the states of a game played well. With `label_groups`
+    (name -> [start, stop) of the actions) the loss weighs each label by `label_weights` (GroupedLoss) and the
+    report holds each group's error."""
 
-    def __init__(self, *args, teacher_act_fraction: float = 0.0, teacher_act_iterations: int = 0, **kwargs):
+    def __init__(self, *args, teacher_act_fraction: float = 0.0, teacher_act_iterations: int = 0,
+                 label_groups: dict[str, tuple[int, int]] | None = None, label_weights: list[float] | None = None,
+                 **kwargs):
         super().__init__(*args, **kwargs)
         self.teacher_act_fraction, self.teacher_act_iterations = teacher_act_fraction, teacher_act_iterations
+        if label_groups:
+            self.loss_fn = GroupedLoss(label_groups, label_weights)
+
+    def update(self) -> dict[str, float]:
+        """rsl-rl's update; with label groups, each group's mean squared error beside the (weighted) loss."""
+        losses = super().update()
+        if isinstance(self.loss_fn, GroupedLoss):
+            losses.update(self.loss_fn.report())
+        return losses
 
     def act(self, obs):
         actions = super().act(obs)
@@ -261,12 +298,10 @@ def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps:
     if method == "rma":  # the student acts with the teacher's head: same sizes
         changes["latent"] = dataclasses.replace(teacher.latent)
     config = apply_overrides(dataclasses.replace(teacher, **changes).resolved(), list(overrides))
-    if config.estimates_world:  # it adds the placo command itself, from its estimate: no command observation
-        if not teacher.command_prior:
-            raise ConfigError(f"command_prior=placo: the student adds the placo command to corrections it learns "
-                              f"from a teacher that corrected that command; teacher {teacher_run} did not "
-                              f"(its command_prior is '')")
-        config = dataclasses.replace(config, distill=dataclasses.replace(config.distill, teacher_prior=False))
+    if config.estimates_world and not teacher.command_prior:  # it adds the placo command itself, from its estimate
+        raise ConfigError(f"command_prior=placo: the student adds the placo command to corrections it learns "
+                          f"from a teacher that corrected that command; teacher {teacher_run} did not "
+                          f"(its command_prior is '')")
     if method == "rma" and (config.ppo.actor_hidden, config.latent.latent_dim) != \
             (teacher.ppo.actor_hidden, teacher.latent.latent_dim):
         raise ConfigError("rma reuses the teacher's head: ppo.actor_hidden and latent.latent_dim must be the teacher's")

@@ -140,7 +140,7 @@ def test_a_teacher_that_corrected_the_placo_command_teaches_the_whole_command(pl
 
     record = start_distill(str(placo_teacher), "dagger", str(tmp_path / "student"), timesteps=16, progress=False,
                            task="soccer-1v1-vision")
-    assert record["step"] == 16 and np.isfinite(record["loss_behavior"])
+    assert record["step"] == 16 and np.isfinite(record["loss_behavior"]) and "loss_behavior_ball" in record
     student, scfg = load_policy(tmp_path / "student")
     assert scfg.command_prior == "" and scfg.distill.teacher_prior and scfg.walker == WALKER
     assert student.inputs == ("state", "camera") and student.num_actions == 3
@@ -186,9 +186,20 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
     cls, kwargs = resolve_class(teacher_model(cfg, student_cfg))
     labeller = cls(obs, {"teacher": ["features"]}, "teacher", 17, **kwargs)
     plain = MLPModel(obs, {"teacher": ["features"]}, "teacher", 3, **{k: v for k, v in kwargs.items()
-                                                                       if k != "corrections"})
+                                                                       if k not in ("corrections", "margin")})
     plain.load_state_dict(labeller.state_dict())
     torch.testing.assert_close(labeller(obs), torch.cat([plain(obs), obs["features"][:, PROPRIO_SIZE:]], -1))
+    obs["command_prior"] = torch.tensor([[0.9, -0.2, 0.0], [-1.0, 0.5, 1.0]])  # the placo command at the truth
+    torch.testing.assert_close(labeller(obs)[:, :3], plain(obs))  # by default the raw corrections
+    for margin in (0.0, 0.5):  # what a clip of the command to [-1 - margin, 1 + margin] leaves of the corrections
+        margin_cfg = dataclasses.replace(student_cfg, distill=dataclasses.replace(student_cfg.distill,
+                                                                                  correction_margin=margin))
+        cls, kwargs = resolve_class(teacher_model(cfg, margin_cfg))
+        with_margin = cls(obs, {"teacher": ["features"]}, "teacher", 17, **kwargs)
+        with_margin.load_state_dict(labeller.state_dict())
+        clipped = (plain(obs) + obs["command_prior"]).clamp(-1 - margin, 1 + margin) - obs["command_prior"]
+        torch.testing.assert_close(with_margin(obs)[:, :3], clipped)
+        assert (clipped + obs["command_prior"]).abs().max() <= 1.0 + margin
 
     assert main(["distill", str(placo_teacher), "--method", "kl", "--task", "soccer-1v1-vision", "--run-dir",
                  str(tmp_path / "kl"), "--set", "command_prior=placo"]) == 2
@@ -198,7 +209,7 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
                            task="soccer-1v1-vision", overrides=["command_prior=placo"])
     assert record["step"] == 16 and np.isfinite(record["loss_behavior"])
     student, scfg = load_policy(tmp_path / "student")
-    assert scfg.estimates_world and not scfg.distill.teacher_prior and student.num_actions == 17
+    assert scfg.estimates_world and scfg.distill.teacher_prior and student.num_actions == 17
     report = run_drill("empty-goal", str(tmp_path / "student"), episodes=1, seed=0, threads=1, progress=False,
                        num_envs=1, checkpoint=str(RunDir(tmp_path / "student").latest_checkpoint()))
     assert report["episodes"] == 1 and report["checkpoint"].endswith(".pt")
@@ -330,3 +341,41 @@ def test_the_deployed_memory_actor_computes_what_the_trained_model_does():
             model.reset(done)
             memory[:, done == 1] = 0.0
     torch.testing.assert_close(memory, model.get_hidden_state())
+
+
+def test_label_weights_weigh_named_groups_and_the_drill_ignores_the_absent_opponent():
+    import torch.nn.functional as F
+
+    from policies.algorithms import weighted_labels
+    from policies.config import ConfigError
+    from policies.distill import GroupedLoss
+
+    from policies.config import DistillConfig
+
+    student = apply_overrides(TrainConfig(task="soccer-1v1-vision", algo="dagger", distill=DistillConfig(teacher="t")),
+                              [f"walker={WALKER}", "command_prior=placo"])
+    labels = weighted_labels(student)
+    assert list(labels["label_groups"]) == ["corrections", "ball", "ball_vel", "own_goal", "opponent_goal",
+                                            "opponent0"] and labels["label_weights"] == [1.0] * 17
+    drill = weighted_labels(dataclasses.replace(student, drill="empty-goal"))["label_weights"]
+    assert drill[:13] == [1.0] * 13 and drill[13:] == [0.0] * 4  # the opponent goal still counts
+    weighted = apply_overrides(student, ["distill.label_weights={ball: 4, corrections: 0.5}"])
+    assert weighted_labels(weighted)["label_weights"][:7] == [0.5] * 3 + [4.0] * 3 + [1.0]
+    twice = apply_overrides(weighted, ["distill.label_weights.ball=2", "distill.label_weights.own_goal=3"])
+    assert twice.distill.label_weights == {"ball": 2.0, "corrections": 0.5, "own_goal": 3.0}  # entries of the mapping
+    assert weighted.distill.label_weights == {"ball": 4.0, "corrections": 0.5}  # the original stays as it was
+    for bad, message in (("{bal: 4}", "no label group"), ("{ball: -1}", r"in \[0, 1000\]"), ("4", "a mapping"),
+                         ("{ball:4}", "a space after each colon")):
+        with pytest.raises(ConfigError, match=message):
+            apply_overrides(student, [f"distill.label_weights={bad}"])
+    with pytest.raises(ConfigError, match="estimates the game"):
+        apply_overrides(TrainConfig(task="soccer-1v1"), ["distill.label_weights={ball: 2}"])
+
+    actions, targets = torch.randn(5, 4, 17), torch.randn(5, 4, 17)
+    plain = GroupedLoss(labels["label_groups"], labels["label_weights"])
+    torch.testing.assert_close(plain(actions, targets), F.mse_loss(actions, targets))
+    report = plain.report()
+    torch.testing.assert_close(torch.tensor(report["behavior_ball"]), F.mse_loss(actions[..., 3:6], targets[..., 3:6]))
+    assert sorted(report) == sorted(f"behavior_{name}" for name in labels["label_groups"]) and plain.count == 0
+    only_ball = GroupedLoss(labels["label_groups"], [0.0] * 3 + [1.0] * 3 + [0.0] * 11)
+    torch.testing.assert_close(only_ball(actions, targets), F.mse_loss(actions[..., 3:6], targets[..., 3:6]) * 3 / 17)

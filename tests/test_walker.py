@@ -127,8 +127,10 @@ def test_with_the_placo_prior_actions_correct_the_placo_players_command():
     np.testing.assert_allclose(np.asarray(batch.state.info["last_action"])[:, :, :3], expected, atol=1e-5)
     estimating = LearnerView(make("soccer-1v1-vision"), walker=walker)  # the prior from its estimate of the game
     assert estimating.estimates_world and estimating.action_size == 3 + 14
-    with pytest.raises(ValueError, match="adds the placo command to its own"):
-        LearnerView(make("soccer-1v1-vision"), walker=walker, teacher_prior=True)
+    labelled = VectorEnv.of(LearnerView(make("soccer-1v1-vision"), walker=walker, teacher_prior=True), 1, "native", 1)
+    obs = labelled.reset(jax.random.PRNGKey(4)).state.obs  # its teacher's labels are clipped by the true command
+    np.testing.assert_allclose(np.asarray(obs["command_prior"]),
+                               np.asarray(walker.prior_actions(obs["features"], tables)), atol=1e-6)
     plain = dataclasses.replace(walker, prior=None)  # a vision student's: it commands the whole command
     student = VectorEnv.of(LearnerView(make("soccer-1v1-vision"), walker=plain, teacher_prior=True), 2, "native", 1)
     obs = student.reset(jax.random.PRNGKey(4)).state.obs

@@ -40,11 +40,18 @@ def estimate_parts(players_per_team: int) -> dict[str, slice]:
             "first_other": slice(first_other.start, first_other.start + 2)}
 
 
+def label_groups(players_per_team: int) -> dict[str, slice]:
+    """Named groups of the actions of a learner that estimates the game (`estimates_world`), which are also its
+    teacher's labels: `corrections` to the placo command, then the game features after the proprioception."""
+    return layout_slices([("corrections", COMMAND_SIZE)] + feature_layout(players_per_team)[1:])
+
+
 class LearnerView(MjxEnv):
     """Agent 0 of `game` as a Brax-style single-agent environment; `step(state, action, opponent=None)`
     (the opponent drives every other robot; None: the script). With `walker` the actions are velocity
     commands (legged.soccer.walker); with `teacher_prior` (vision games) the observations also hold
-    `command_prior`, the placo player's command as actions, which a state teacher's corrections add to.
+    `command_prior`, the placo player's command (from the true state) as actions, which a state teacher's
+    corrections add to (a student that estimates the game does not read it; its teacher's labels do).
 
     A vision player whose walker adds the placo command (`command_prior=placo`) cannot read the ball and goals
     that command is computed from; it estimates them (`estimates_world`): its actions are [corrections to the
@@ -61,9 +68,6 @@ class LearnerView(MjxEnv):
             raise ValueError(f"the walker was trained with env.ctrl_dt={walker.dt:g}; this game steps every "
                              f"{game.dt:g} s: set env.ctrl_dt={walker.dt:g}")
         self.estimates_world = walker is not None and walker.prior is not None and game.config.vision
-        if teacher_prior and self.estimates_world:
-            raise ValueError("teacher_prior (the placo command given as an observation) is for a vision student that "
-                             "learns the whole command; this one adds the placo command to its own (command_prior)")
         if game.config.vision_gaze and not self.estimates_world:
             raise ValueError("vision_gaze turns the head toward the player's own estimate of the ball: it needs a "
                              "vision player that estimates the game (a walker with the placo prior: command_prior=placo)")
