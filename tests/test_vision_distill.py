@@ -210,7 +210,7 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
                            task="soccer-1v1-vision", overrides=["command_prior=placo"])
     assert record["step"] == 16 and np.isfinite(record["loss_behavior"]) and "loss_behavior_ball" in record
     student, scfg = load_policy(tmp_path / "student")
-    assert scfg.estimates_world and scfg.distill.teacher_prior and student.num_actions == 17
+    assert scfg.estimates_world and not scfg.distill.teacher_prior and student.num_actions == 17  # raw labels
     report = run_drill("empty-goal", str(tmp_path / "student"), episodes=1, seed=0, threads=1, progress=False,
                        num_envs=1, checkpoint=str(RunDir(tmp_path / "student").latest_checkpoint()))
     assert report["episodes"] == 1 and report["checkpoint"].endswith(".pt")
