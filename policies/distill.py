@@ -61,7 +61,7 @@ class GroupedLoss:
         if actions.shape[-1] != len(self.weights):
             raise ValueError(f"{actions.shape[-1]} actions but {len(self.weights)} label weights")
         squared = (actions - labels) ** 2
-        self.sums += squared.detach().reshape(-1, squared.shape[-1]).mean(0).cpu()
+        self.sums = self.sums.to(squared.device) + squared.detach().reshape(-1, squared.shape[-1]).mean(0)
         self.count += 1
         return (squared * self.weights.to(squared.device)).mean()
 
