@@ -145,9 +145,7 @@ class DistillConfig:
     1 + this] less the placo command at the truth (inf: the raw corrections; 0: as the walker clips)."""
     teacher_prior: bool = False
     """Set by `legged distill`: the teacher (a state soccer player, command_prior=placo) corrected the placo
-    player's command, which its vision student's game then gives as the observation `command_prior` (a student
-    that estimates the game, TrainConfig.estimates_world, does not read it: its teacher's labels are clipped by
-    it, see correction_margin)."""
+    player's command (see TrainConfig.game_gives_placo_command for what the vision student's game makes of it)."""
 
 
 ALGOS = ("ppo", "teacher", "hib", "hib-no-ib", "history", "dagger", "rma", "kl")
@@ -219,6 +217,16 @@ class TrainConfig:
         """Whether this vision soccer player adds the placo command (command_prior) to its own, computed from its
         estimate of the game features, which its actions then hold (legged.soccer.learner)."""
         return bool(self.command_prior) and bool(getattr(self.env, "vision", False))
+
+    @property
+    def game_gives_placo_command(self) -> bool:
+        """Whether this vision student's game computes the placo command at the true state (LearnerView's
+        `teacher_prior`): as the observation `command_prior` of a student whose teacher corrected that command
+        (distill.teacher_prior), or, for a student that estimates the game (estimates_world, which computes the
+        command itself from its estimate), only to clip its correction labels (finite distill.correction_margin)."""
+        if self.estimates_world:
+            return math.isfinite(self.distill.correction_margin)
+        return bool(self.distill.teacher_prior)
 
     @property
     def self_play(self) -> bool:

@@ -25,7 +25,6 @@ Two kinds of teacher:
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from pathlib import Path
 
@@ -303,9 +302,6 @@ def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps:
         raise ConfigError(f"command_prior=placo: the student adds the placo command to corrections it learns "
                           f"from a teacher that corrected that command; teacher {teacher_run} did not "
                           f"(its command_prior is '')")
-    if config.estimates_world:  # the labeller needs the placo command at the truth only to clip its corrections
-        config = dataclasses.replace(config, distill=dataclasses.replace(
-            config.distill, teacher_prior=math.isfinite(config.distill.correction_margin)))
     if method == "rma" and (config.ppo.actor_hidden, config.latent.latent_dim) != \
             (teacher.ppo.actor_hidden, teacher.latent.latent_dim):
         raise ConfigError("rma reuses the teacher's head: ppo.actor_hidden and latent.latent_dim must be the teacher's")

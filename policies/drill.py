@@ -105,7 +105,7 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
         walker = load_walker(run.walker, run.getup, run.command_prior)
     game = SoccerConfig() if run is None else players_view(run.env)
     return DrillEnv(drill, with_randomization(game), placo=player == "placo", walker=walker,
-                    teacher_prior=run is not None and run.distill.teacher_prior)  # a vision student's observations
+                    teacher_prior=run is not None and run.game_gives_placo_command)  # a vision student's observations
 
 
 def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "native", threads: int | None = None,

@@ -41,9 +41,17 @@ def ood_config(env_config):
 
 def estimate_errors(finals: list[dict]) -> dict:
     """A vision player that estimates the game: the RMS position errors of its estimate (metres) by part, averaged
-    over the episodes; {} for other players."""
-    estimates = sorted(k for k in finals[0] if k.startswith("estimate_"))
-    return {k[9:-2]: float(np.mean([f[k] for f in finals])) for k in estimates}
+    over the episodes, and `ball_near` (the ball when near, legged.soccer.learner.NEAR_BALL_M) pooled over the
+    steps it was near (None if it never was); {} for other players."""
+    estimates = sorted(k for k in finals[0]
+                       if k.startswith("estimate_") and k.endswith("_m") and k != "estimate_ball_near_m")
+    out = {k[9:-2]: float(np.mean([f[k] for f in finals])) for k in estimates}
+    if "estimate_ball_near_m" in finals[0]:
+        steps = np.array([f["estimate_ball_near_steps"] for f in finals])
+        sq = np.array([f["estimate_ball_near_m"] ** 2 for f in finals]) * steps
+        out["ball_near"] = float(np.sqrt(sq.sum() / steps.sum())) if steps.sum() > 0 else None
+        out["ball_near_share"] = float(steps.sum() / np.sum([f["length"] for f in finals]))
+    return out
 
 
 def summarize(finals: list[dict], confined: bool) -> dict:

@@ -25,7 +25,7 @@ def build_env(config: TrainConfig, progress: bool = True):
         from legged.soccer.drills import DrillConfig, DrillEnv
 
         return DrillEnv(DrillConfig(name=config.drill), config.env, walker=walker,
-                        teacher_prior=config.distill.teacher_prior)
+                        teacher_prior=config.game_gives_placo_command)
     if entry.kind == "confined":
         from planners import make_planned_env
 
@@ -33,7 +33,7 @@ def build_env(config: TrainConfig, progress: bool = True):
     else:
         env = make(config.task, config.env)
     return learner_env(entry, env, config.ppo.activation, config.ppo.actor_hidden, walker,
-                       config.distill.teacher_prior)
+                       config.game_gives_placo_command)
 
 
 def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> dict:

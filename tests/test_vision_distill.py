@@ -143,7 +143,8 @@ def test_a_teacher_that_corrected_the_placo_command_teaches_the_whole_command(pl
     assert record["step"] == 16 and np.isfinite(record["loss_behavior"])
     assert "loss_behavior_ball" not in record  # a whole-command student has no label groups
     student, scfg = load_policy(tmp_path / "student")
-    assert scfg.command_prior == "" and scfg.distill.teacher_prior and scfg.walker == WALKER
+    assert scfg.command_prior == "" and scfg.distill.teacher_prior and scfg.game_gives_placo_command
+    assert scfg.walker == WALKER
     assert student.inputs == ("state", "camera") and student.num_actions == 3
     from policies.drill import run_drill  # the student does the empty-goal drill through its own camera
 
@@ -210,17 +211,21 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
                            task="soccer-1v1-vision", overrides=["command_prior=placo"])
     assert record["step"] == 16 and np.isfinite(record["loss_behavior"]) and "loss_behavior_ball" in record
     student, scfg = load_policy(tmp_path / "student")
-    assert scfg.estimates_world and not scfg.distill.teacher_prior and student.num_actions == 17  # raw labels
+    assert scfg.estimates_world and scfg.distill.teacher_prior and student.num_actions == 17  # raw labels
+    assert not scfg.game_gives_placo_command  # it computes the command from its estimate; raw labels need none
     report = run_drill("empty-goal", str(tmp_path / "student"), episodes=1, seed=0, threads=1, progress=False,
                        num_envs=1, checkpoint=str(RunDir(tmp_path / "student").latest_checkpoint()))
     assert report["episodes"] == 1 and report["checkpoint"].endswith(".pt")
-    assert sorted(report["estimate_rms_m"]) == ["ball", "first_other", "opponent_goal", "own_goal"]
+    assert sorted(report["estimate_rms_m"]) == ["ball", "ball_near", "ball_near_share", "first_other",
+                                                "opponent_goal", "own_goal"]
     capsys.readouterr()
     assert main(["eval", str(tmp_path / "student"), "--opponent", "placo", "--episodes", "1", "--num-envs", "1",
                  "--physics", "native", "--threads", "1", "--json"]) == 0
     errors = json.loads(capsys.readouterr().out)["estimate_rms_m"]  # how far its estimate was from the truth
+    near, share = errors.pop("ball_near"), errors.pop("ball_near_share")  # the ball when near: some steps or none
     assert sorted(errors) == ["ball", "first_other", "opponent_goal", "own_goal"]
     assert all(0.0 < e < 100.0 for e in errors.values())
+    assert 0.0 <= share <= 1.0 and (near is None if share == 0.0 else 0.0 < near < 100.0)
 
 
 def test_a_curriculum_distils_on_the_empty_goal_drill_then_takes_that_student_whole(placo_teacher, tmp_path, capsys):
@@ -276,6 +281,17 @@ def test_dagger_beta_falls_linearly_to_zero():
 
     assert [teacher_share(0.5, 4, k) for k in (0, 2, 4, 9)] == [0.5, 0.25, 0.0, 0.0]
     assert teacher_share(0.3, 0, 100) == 0.3 and teacher_share(0.0, 10, 0) == 0.0
+
+
+def test_the_game_gives_the_placo_command_to_a_corrector_or_to_clip_an_estimating_students_labels():
+    vision = dataclasses.replace(TrainConfig(task="soccer-1v1-vision").resolved(), algo="dagger")
+    corrected = dataclasses.replace(vision.distill, teacher_prior=True)
+    assert not vision.game_gives_placo_command  # a teacher that did not correct the placo command
+    assert dataclasses.replace(vision, distill=corrected).game_gives_placo_command  # the observation command_prior
+    estimating = dataclasses.replace(vision, command_prior="placo", distill=corrected)
+    assert estimating.estimates_world and not estimating.game_gives_placo_command  # raw labels: not needed
+    clipped = dataclasses.replace(estimating, distill=dataclasses.replace(corrected, correction_margin=0.5))
+    assert clipped.game_gives_placo_command  # to clip its correction labels
 
 
 def test_a_memory_student_starts_from_another_remembers_forgets_on_reset_and_exports(soccer_teacher, tmp_path, capsys):

@@ -128,9 +128,18 @@ def test_with_the_placo_prior_actions_correct_the_placo_players_command():
     estimating = LearnerView(make("soccer-1v1-vision"), walker=walker)  # the prior from its estimate of the game
     assert estimating.estimates_world and estimating.action_size == 3 + 14
     labelled = VectorEnv.of(LearnerView(make("soccer-1v1-vision"), walker=walker, teacher_prior=True), 1, "native", 1)
-    obs = labelled.reset(jax.random.PRNGKey(4)).state.obs  # its teacher's labels are clipped by the true command
+    state = labelled.reset(jax.random.PRNGKey(4)).state
+    obs = state.obs  # its teacher's labels are clipped by the true command
     np.testing.assert_allclose(np.asarray(obs["command_prior"]),
                                np.asarray(walker.prior_actions(obs["features"], tables)), atol=1e-6)
+    state = jax.tree.map(lambda x: x[0], state)  # its estimate's errors: every part, and the ball only when near
+    for ball_xy, near in (((0.5, -0.6), 1.0), ((0.9, 0.5), 0.0)):
+        truth = state.info["game_obs"]["features"].at[0, PROPRIO_SIZE:PROPRIO_SIZE + 2].set(jnp.asarray(ball_xy))
+        placed = state.replace(info={**state.info, "game_obs": {**state.info["game_obs"], "features": truth}})
+        action = jnp.concatenate([jnp.zeros(3), truth[0, PROPRIO_SIZE:]]).at[3:5].add(jnp.asarray([0.3, -0.4]))
+        sq, steps = estimating._estimate_sq(placed, action)
+        np.testing.assert_allclose(np.asarray(sq), [0.25, 0.0, 0.0, 0.0, 0.25 * near], atol=1e-6)
+        np.testing.assert_allclose(np.asarray(steps), [1.0, 1.0, 1.0, 1.0, near])
     plain = dataclasses.replace(walker, prior=None)  # a vision student's: it commands the whole command
     student = VectorEnv.of(LearnerView(make("soccer-1v1-vision"), walker=plain, teacher_prior=True), 2, "native", 1)
     obs = student.reset(jax.random.PRNGKey(4)).state.obs

@@ -29,6 +29,9 @@ LEARNER = 0
 """Agent index the learner controls."""
 HEAD_PAN = 0
 """Index of the head pan joint in the OP3's joint actions (RobotSpec.joint_names)."""
+NEAR_BALL_M = 1.0
+"""The ball this close to the learner (metres, in the ground plane) is near: the estimate's `ball_near` error
+counts those steps only, where kicking needs the estimate most."""
 
 
 def estimate_parts(players_per_team: int) -> dict[str, slice]:
@@ -96,9 +99,9 @@ class LearnerView(MjxEnv):
 
     def first_state(self, view: PhysicsView, info: dict, rng: jax.Array) -> State:
         game = self.game.first_state(view, info, rng)
-        if self.estimates_world:  # running sums of its estimate's squared errors, and of the steps
-            game = game.replace(info=dict(game.info, estimate_sq=jnp.zeros(len(self.estimate_parts)),
-                                          estimate_steps=jnp.zeros(())))
+        if self.estimates_world:  # running sums of its estimate's squared errors, and of their steps
+            zeros = jnp.zeros(len(self.estimate_parts) + 1)  # the parts, then the ball when near
+            game = game.replace(info=dict(game.info, estimate_sq=zeros, estimate_steps=zeros))
         return self._view(game)
 
     def prepare(self, state: State, action: jax.Array, opponent: Opponent | None = None,
@@ -169,18 +172,24 @@ class LearnerView(MjxEnv):
         """The learner's actions: a player's, then its estimate of the game features (`estimates_world`)."""
         return self.player_action_size + self.world_size
 
-    def _estimate_sq(self, state: State, action: jax.Array) -> jax.Array | None:
-        """Squared errors of the learner's estimate (`estimates_world`) of each of `estimate_parts`, metres^2."""
+    def _estimate_sq(self, state: State, action: jax.Array) -> tuple[jax.Array, jax.Array] | None:
+        """(squared errors (metres^2), steps counted) of the learner's estimate (`estimates_world`) of each of
+        `estimate_parts`, then of the ball when it is near (NEAR_BALL_M; else neither counts)."""
         if not self.estimates_world:
             return None
-        error = action[COMMAND_SIZE:] - state.info["game_obs"]["features"][LEARNER, PROPRIO_SIZE:]
-        return jnp.stack([jnp.sum(error[part] ** 2) for part in self.estimate_parts.values()])
+        truth = state.info["game_obs"]["features"][LEARNER, PROPRIO_SIZE:]
+        error = action[COMMAND_SIZE:] - truth
+        sq = jnp.stack([jnp.sum(error[part] ** 2) for part in self.estimate_parts.values()])
+        ball = self.estimate_parts["ball"]
+        near = (jnp.linalg.norm(truth[ball][:2]) < NEAR_BALL_M).astype(sq.dtype)
+        return jnp.append(sq, near * sq[0]), jnp.append(jnp.ones_like(sq), near)
 
     def transition(self, state: State, view: PhysicsView, actions) -> State:
         actions, memory, walker_state, estimate_sq = actions
         info = dict(state.info, players=memory, walker_state=walker_state)
         if estimate_sq is not None:
-            info.update(estimate_sq=info["estimate_sq"] + estimate_sq, estimate_steps=info["estimate_steps"] + 1.0)
+            sq, steps = estimate_sq
+            info.update(estimate_sq=info["estimate_sq"] + sq, estimate_steps=info["estimate_steps"] + steps)
         game_obs = info.pop("game_obs")
         game = State(view, game_obs, jnp.zeros(self.game.n_agents), state.done, {}, info)
         return self._view(self.game.transition(game, view, actions))
@@ -210,9 +219,11 @@ class LearnerView(MjxEnv):
         metrics = {k: v[LEARNER] if v.ndim else v for k, v in game.metrics.items()
                    if k not in ("goals_home", "goals_away")}
         metrics.update(goals_for=game.metrics["goals_home"], goals_against=game.metrics["goals_away"])
-        if self.estimates_world:  # root mean square over the episode so far
-            rms = jnp.sqrt(game.info["estimate_sq"] / jnp.maximum(game.info["estimate_steps"], 1.0))
-            metrics.update({f"estimate_{name}_m": rms[k] for k, name in enumerate(self.estimate_parts)})
+        if self.estimates_world:  # root mean square over the episode so far (0 before any step counted)
+            steps = game.info["estimate_steps"]
+            rms = jnp.sqrt(game.info["estimate_sq"] / jnp.maximum(steps, 1.0))
+            metrics.update({f"estimate_{name}_m": rms[k] for k, name in enumerate([*self.estimate_parts, "ball_near"])})
+            metrics["estimate_ball_near_steps"] = steps[-1]  # to pool ball_near over episodes
         info = {**game.info, "game_obs": game.obs}
         obs = {k: v[LEARNER] for k, v in game.obs.items()}
         if self.teacher_prior:  # what the teacher's corrections were added to, from the state it reads
