@@ -17,7 +17,7 @@ def cmd_drill(args) -> int:
         raise ValueError(f"--checkpoint picks a checkpoint of a run; --player {args.player} has none")
     report = run_drill(args.drill, args.player, args.episodes, args.seed, args.physics, args.threads or None,
                        randomize=args.randomize, progress=not args.quiet, num_envs=min(args.episodes, args.num_envs),
-                       checkpoint=args.checkpoint)
+                       checkpoint=args.checkpoint, seconds=args.seconds)
     print(json.dumps(report) if args.json else json.dumps(report, indent=2))
     return 0
 
@@ -33,6 +33,8 @@ def add_soccer_commands(sub) -> None:
     dr.add_argument("--checkpoint", default=None, help="a checkpoint file of the --player run (default: its newest)")
     dr.add_argument("--episodes", type=bounded(int, 1, 100000), default=16)
     dr.add_argument("--seed", type=SEED, default=12345, help="seed of the drill episodes")
+    dr.add_argument("--seconds", type=bounded(float, 0, 3600), default=None,
+                    help="length of an episode (default: 20 s for walk and empty-goal, 5 s for getup)")
     dr.add_argument("--num-envs", type=bounded(int, 1, 4096), default=16, help="episodes run side by side")
     dr.add_argument("--randomize", action="store_true",
                     help="the game's domain randomisation (friction, ball, masses, motor strength)")

@@ -110,10 +110,11 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
 
 def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "native", threads: int | None = None,
               randomize: bool = False, progress: bool = True, num_envs: int = 16,
-              checkpoint: str | None = None) -> dict:
-    """Run `episodes` episodes of drill `name` with `player` (a run: its newest checkpoint, or `checkpoint`);
-    returns its figures (see legged.soccer.drills)."""
-    drill = DrillConfig(name=name)
+              checkpoint: str | None = None, seconds: float | None = None) -> dict:
+    """Run `episodes` episodes of drill `name` with `player` (a run: its newest checkpoint, or `checkpoint`),
+    each `seconds` long (default: DrillConfig's); returns its figures (see legged.soccer.drills)."""
+    lengths = {} if seconds is None else {"getup_seconds" if name == "getup" else "episode_seconds": seconds}
+    drill = DrillConfig(name=name, **lengths)
     check_player(player, drill)
     env = drill_env(player, drill, randomize)
     policy = drill_player(player, env, checkpoint)

@@ -84,6 +84,10 @@ def test_drill_and_opponent_errors_are_one_line(tmp_path, capsys):
         assert main(argv) == 2
         err = capsys.readouterr().err
         assert message in err and err.count("\n") == 1, err
+    from legged.soccer.drills import DrillConfig
+
+    with pytest.raises(ValueError, match="positive length, got episode_seconds=0"):
+        DrillConfig(name="walk", episode_seconds=0.0)
 
 
 def test_dashboard_rolls_out_against_the_placo_player():

@@ -28,7 +28,10 @@ def tiny_env():
 
 @pytest.fixture(scope="module")
 def trained_run(tiny_env, tmp_path_factory):
-    """A run killed after its second report (checkpoint 1 only), then resumed to 120 steps."""
+    """A run killed after its second report (checkpoint 1 only), then resumed to 120 steps. In native physics:
+    the run directory and its resume do not depend on the engine, and an MJX training program would be
+    the suite's costliest compilation (12 minutes on a slow 2-core machine); the MJX engine of the same
+    VectorEnv is checked by the evaluation below and by the Brax run (tests/test_training_brax.py)."""
     run_dir = tmp_path_factory.mktemp("runs") / "tiny"
     patch = pytest.MonkeyPatch()
     patch.setattr(training, "build_env", lambda config: tiny_env)
@@ -40,13 +43,16 @@ def trained_run(tiny_env, tmp_path_factory):
             raise KeyboardInterrupt  # as if the process were killed before checkpoint 2 was written
 
     patch.setattr(RunDir, "log", killed_after_second_report)
+    torch_threads = torch.get_num_threads()  # a native run pins torch's threads; the other tests keep theirs
     with pytest.raises(KeyboardInterrupt):
-        training.start_run("go1-flat", str(run_dir), num_envs=BATCH, timesteps=120, overrides=TINY, progress=False)
+        training.start_run("go1-flat", str(run_dir), num_envs=BATCH, timesteps=120, overrides=TINY, progress=False,
+                           physics="native", threads=1)
     patch.setattr(RunDir, "log", real_log)
     before = RunDir(run_dir).metrics()
     checkpoints_before = [p.name for p in RunDir(run_dir).checkpoints()]
     training.resume_run(str(run_dir), progress=False)
     patch.undo()
+    torch.set_num_threads(torch_threads)
     return run_dir, before, checkpoints_before
 
 
@@ -204,14 +210,17 @@ def test_a_diverging_run_stops_keeps_its_last_good_checkpoint_and_resumes(tiny_e
         return losses
 
     monkeypatch.setattr(PPO, "update", poisoned_update)
-    run_dir = tmp_path / "diverging"
+    run_dir, torch_threads = tmp_path / "diverging", torch.get_num_threads()
     with pytest.raises(TrainingDiverged, match="actor parameters not finite.*step_000000000040.pt"):
-        training.start_run("go1-flat", str(run_dir), num_envs=BATCH, timesteps=120, overrides=TINY, progress=False)
+        training.start_run("go1-flat", str(run_dir), num_envs=BATCH, timesteps=120, overrides=TINY, progress=False,
+                           physics="native", threads=1)  # native, like `trained_run`: no MJX training compiled
+    torch.set_num_threads(torch_threads)
     run = RunDir(run_dir)
     assert [p.name for p in run.checkpoints()] == ["step_000000000040.pt"]
     assert [r["step"] for r in run.metrics()] == [40, 80]  # the bad iteration is logged, not saved
     monkeypatch.setattr(PPO, "update", real_update)
     record = training.resume_run(str(run_dir), progress=False)
+    torch.set_num_threads(torch_threads)
     assert record["step"] == 120 and all(np.isfinite(v) for k, v in record.items() if k.startswith("loss_"))
 
 

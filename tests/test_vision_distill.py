@@ -93,6 +93,8 @@ def test_a_vision_student_learns_from_the_state_player(soccer_teacher, tmp_path,
 
 
 WALKER = "assets/policies/op3-walker"
+DRILL_S = 1.0
+"""Episodes of the tests' drills (40 control steps; the drill's own 20 s took 5 minutes on a slow machine)."""
 
 
 def _placo_teacher_config() -> TrainConfig:
@@ -149,7 +151,7 @@ def test_a_teacher_that_corrected_the_placo_command_teaches_the_whole_command(pl
     from policies.drill import run_drill  # the student does the empty-goal drill through its own camera
 
     report = run_drill("empty-goal", str(tmp_path / "student"), episodes=1, seed=0, threads=1, progress=False,
-                       num_envs=1)
+                       num_envs=1, seconds=DRILL_S)
     assert report["episodes"] == 1 and report["goal_rate"] in (0.0, 1.0)
 
 
@@ -214,8 +216,9 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
     assert scfg.estimates_world and scfg.distill.teacher_prior and student.num_actions == 17  # raw labels
     assert not scfg.game_gives_placo_command  # it computes the command from its estimate; raw labels need none
     report = run_drill("empty-goal", str(tmp_path / "student"), episodes=1, seed=0, threads=1, progress=False,
-                       num_envs=1, checkpoint=str(RunDir(tmp_path / "student").latest_checkpoint()))
+                       num_envs=1, checkpoint=str(RunDir(tmp_path / "student").latest_checkpoint()), seconds=DRILL_S)
     assert report["episodes"] == 1 and report["checkpoint"].endswith(".pt")
+    assert 0.0 < report["episode_seconds"] <= DRILL_S + 1e-6  # the drill's length is the one asked for
     assert sorted(report["estimate_rms_m"]) == ["ball", "ball_near", "ball_near_share", "first_other",
                                                 "opponent_goal", "own_goal"]
     capsys.readouterr()

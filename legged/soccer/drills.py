@@ -1,13 +1,13 @@
 """Drills for any OP3 soccer player: one robot on the soccer pitch, the other parked off it, one skill measured.
 
 - `walk`: the robot starts at the centre spot facing a random way and is given random velocity commands
-  (a new one every `command_seconds`) for 20 s; reported: `speed_mps` (mean planar speed),
+  (a new one every `command_seconds`) for `episode_seconds` (20 s); reported: `speed_mps` (mean planar speed),
   `tracking_error_mps` (mean |commanded - actual| planar velocity in the heading frame),
   `smoothed_tracking_error_mps` (the same with the velocity low-pass filtered over `velocity_filter_s`, which
   averages out the torso's sway within each step), `smoothed_yaw_rate_error_radps` (mean |commanded - actual|
   yaw rate, filtered the same way), `fall_rate`.
 - `empty-goal`: the ball rests 1-2 m in front of the opponent goal, the robot starts 0.5-1.5 m from it at
-  any bearing, turned anyhow; the episode ends at a goal (or a fall, or 20 s); reported: `goal_rate`.
+  any bearing, turned anyhow; the episode ends at a goal (or a fall, or after `episode_seconds`); reported: `goal_rate`.
 - `getup`: the robot starts lying at the centre spot (on its front, back or a side, any heading, joints
   jittered) and has `getup_seconds` to stand (torso origin above `stand_height`, up axis within 25 degrees
   of vertical, for `stand_hold_s`); reported: `success_rate`, `time_to_stand_s`. Falls do not end it.
@@ -58,6 +58,8 @@ class DrillConfig:
     """empty-goal: range of the ball's distance in front of the goal line, metres."""
     robot_distance: tuple[float, float] = (0.5, 1.5)
     """empty-goal: range of the robot's distance from the ball (any bearing, any heading, on the pitch)."""
+    episode_seconds: float = 20.0
+    """walk and empty-goal: length of an episode, seconds."""
     getup_seconds: float = 5.0
     """getup: length of an episode, seconds."""
     stand_height: float = 0.21
@@ -75,6 +77,9 @@ class DrillConfig:
     def __post_init__(self):
         if self.name not in DRILLS:
             raise ValueError(f"unknown drill {self.name!r}; drills: {', '.join(DRILLS)}")
+        if not (self.episode_seconds > 0 and self.getup_seconds > 0):
+            raise ValueError(f"drill episodes need a positive length, got episode_seconds={self.episode_seconds}, "
+                             f"getup_seconds={self.getup_seconds}")
 
 
 class DrillEnv(LearnerView):
@@ -85,7 +90,7 @@ class DrillEnv(LearnerView):
         getup = drill.name == "getup"
         config = dataclasses.replace(config, end_on_fall="never" if getup else "agent0",
                                      end_on_goal=drill.name == "empty-goal",
-                                     episode_seconds=drill.getup_seconds if getup else 20.0)
+                                     episode_seconds=drill.getup_seconds if getup else drill.episode_seconds)
         super().__init__(SoccerEnv(config), walker=walker, teacher_prior=teacher_prior)
         if self.game.n_agents != 2:
             raise ValueError(f"drills play on the 1v1 scene (2 robots), got {self.game.n_agents}")
