@@ -4,6 +4,8 @@ One tiny go1-flat env (10-step episodes) is compiled once and shared by every te
 object or batch size would compile again (about a minute on 2 CPU cores).
 """
 
+import contextlib
+
 import numpy as np
 import pytest
 import torch
@@ -26,6 +28,16 @@ def tiny_env():
     return make("go1-flat", episode_seconds=EPISODE_S)
 
 
+@contextlib.contextmanager
+def torch_threads_kept():
+    """A native run pins torch's thread count (its `threads`); the tests after it keep theirs."""
+    threads = torch.get_num_threads()
+    try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
+
+
 @pytest.fixture(scope="module")
 def trained_run(tiny_env, tmp_path_factory):
     """A run killed after its second report (checkpoint 1 only), then resumed to 120 steps. In native physics:
@@ -43,16 +55,15 @@ def trained_run(tiny_env, tmp_path_factory):
             raise KeyboardInterrupt  # as if the process were killed before checkpoint 2 was written
 
     patch.setattr(RunDir, "log", killed_after_second_report)
-    torch_threads = torch.get_num_threads()  # a native run pins torch's threads; the other tests keep theirs
-    with pytest.raises(KeyboardInterrupt):
-        training.start_run("go1-flat", str(run_dir), num_envs=BATCH, timesteps=120, overrides=TINY, progress=False,
-                           physics="native", threads=1)
-    patch.setattr(RunDir, "log", real_log)
-    before = RunDir(run_dir).metrics()
-    checkpoints_before = [p.name for p in RunDir(run_dir).checkpoints()]
-    training.resume_run(str(run_dir), progress=False)
+    with torch_threads_kept():
+        with pytest.raises(KeyboardInterrupt):
+            training.start_run("go1-flat", str(run_dir), num_envs=BATCH, timesteps=120, overrides=TINY,
+                               progress=False, physics="native", threads=1)
+        patch.setattr(RunDir, "log", real_log)
+        before = RunDir(run_dir).metrics()
+        checkpoints_before = [p.name for p in RunDir(run_dir).checkpoints()]
+        training.resume_run(str(run_dir), progress=False)
     patch.undo()
-    torch.set_num_threads(torch_threads)
     return run_dir, before, checkpoints_before
 
 
@@ -113,13 +124,13 @@ def test_eval_is_deterministic_and_onnx_matches(trained_run, tiny_env, tmp_path)
 def test_native_training_is_reproducible(tiny_env, tmp_path, monkeypatch):
     """Two native-physics runs with the same seed and thread count log the same metrics."""
     monkeypatch.setattr(training, "build_env", lambda config: tiny_env)
-    runs, torch_threads = [], torch.get_num_threads()
+    runs = []
     for name in ("a", "b"):
-        training.start_run("go1-flat", str(tmp_path / name), num_envs=BATCH, timesteps=80, overrides=TINY,
-                           progress=False, physics="native", threads=1)
+        with torch_threads_kept():
+            training.start_run("go1-flat", str(tmp_path / name), num_envs=BATCH, timesteps=80, overrides=TINY,
+                               progress=False, physics="native", threads=1)
         runs.append([{k: v for k, v in r.items() if k not in ("steps_per_s", "wall_s")}
                      for r in RunDir(tmp_path / name).metrics()])
-    torch.set_num_threads(torch_threads)
     assert runs[0] == runs[1] and len(runs[0]) == 2
     assert RunDir(tmp_path / "a").load_config().physics == "native"
 
@@ -210,17 +221,17 @@ def test_a_diverging_run_stops_keeps_its_last_good_checkpoint_and_resumes(tiny_e
         return losses
 
     monkeypatch.setattr(PPO, "update", poisoned_update)
-    run_dir, torch_threads = tmp_path / "diverging", torch.get_num_threads()
-    with pytest.raises(TrainingDiverged, match="actor parameters not finite.*step_000000000040.pt"):
+    run_dir = tmp_path / "diverging"
+    diverged = pytest.raises(TrainingDiverged, match="actor parameters not finite.*step_000000000040.pt")
+    with torch_threads_kept(), diverged:
         training.start_run("go1-flat", str(run_dir), num_envs=BATCH, timesteps=120, overrides=TINY, progress=False,
                            physics="native", threads=1)  # native, like `trained_run`: no MJX training compiled
-    torch.set_num_threads(torch_threads)
     run = RunDir(run_dir)
     assert [p.name for p in run.checkpoints()] == ["step_000000000040.pt"]
     assert [r["step"] for r in run.metrics()] == [40, 80]  # the bad iteration is logged, not saved
     monkeypatch.setattr(PPO, "update", real_update)
-    record = training.resume_run(str(run_dir), progress=False)
-    torch.set_num_threads(torch_threads)
+    with torch_threads_kept():
+        record = training.resume_run(str(run_dir), progress=False)
     assert record["step"] == 120 and all(np.isfinite(v) for k, v in record.items() if k.startswith("loss_"))
 
 
