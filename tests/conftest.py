@@ -21,20 +21,47 @@ TINY_RUN = ["env.episode_seconds=0.2", "ppo.num_steps_per_env=5", "ppo.num_mini_
 iteration 2."""
 
 
-HEAVIEST_FILES = ("test_envs.py", "test_training_brax.py", "test_dashboard.py", "test_vision_distill.py",
-                  "test_soccer_env.py", "test_training.py", "test_skills.py", "test_walker.py", "test_native.py",
-                  "test_soccer_training.py", "test_follower.py", "test_distill.py", "test_placo_player.py")
-"""Test files by their measured time, longest first (`--durations=0` on a slow 2-core machine, 2026-11-27:
-test_envs 1,130 s, test_training_brax 1,122 s, test_dashboard 977 s, test_vision_distill 770 s, ... down to
-205 s). They start first so that pytest-xdist's two workers end together: run last, the one-test Brax file
-kept one worker busy for 18 minutes after the other had finished. The other files follow in their usual order."""
+HEAVIEST_FILES = ("test_envs.py", "test_vision_distill.py", "test_soccer_env.py", "test_dashboard.py",
+                  "test_training.py", "test_skills.py", "test_walker.py", "test_native.py", "test_soccer_training.py",
+                  "test_follower.py", "test_distill.py", "test_training_brax.py", "test_placo_player.py")
+"""Test files by their measured time, longest first (`--durations=0` on a slow 2-core machine, 2026-11-27, less
+what later cuts saved: test_envs ~1,100 s, test_vision_distill ~700, test_soccer_env ~600, ... down to ~200 s).
+They start first so that pytest-xdist's two workers end together: a long file handed out last keeps one worker
+busy after the other has finished. The other files follow in their usual order."""
+
+
+SHARED_COMPILATIONS = {name: "go1-mjx" for name in ("test_envs.py", "test_mjx_vs_native.py", "test_native.py",
+                                                      "test_heightscan.py")}
+"""Files that step the session's `flat` and `confined` MJX envs run in one process: a fixture is compiled once per
+process, and tracing the two envs again in another process took minutes on a slow machine (the persistent XLA
+cache below saves their compilation, not their tracing)."""
+
+
+def _group(path: str) -> str:
+    """The scheduling unit of a test file: its SHARED_COMPILATIONS group, or the file itself."""
+    return SHARED_COMPILATIONS.get(os.path.basename(path), path)
 
 
 def pytest_collection_modifyitems(items):
-    """Run the heaviest test files first (HEAVIEST_FILES); with `--dist loadfile` and
-    `--no-loadscope-reorder` pytest-xdist hands out the files in this order."""
+    """Run the heaviest test files first (HEAVIEST_FILES), the files of a SHARED_COMPILATIONS group together
+    (at the place of the group's heaviest file); with `--no-loadscope-reorder` pytest-xdist keeps this order."""
     rank = {name: k for k, name in enumerate(HEAVIEST_FILES)}
-    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))  # stable: the rest keep their order
+    first = {}
+    for item in items:
+        group = _group(str(item.path))
+        first[group] = min(first.get(group, len(rank)), rank.get(item.path.name, len(rank)))
+    items.sort(key=lambda item: first[_group(str(item.path))])  # stable: the rest keep their order
+
+
+def pytest_xdist_make_scheduler(config, log):
+    """`--dist loadfile`, with the files of a SHARED_COMPILATIONS group handed to one process as one unit."""
+    from xdist.scheduler import LoadScopeScheduling
+
+    class FileGroupScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return _group(nodeid.split("::", 1)[0])
+
+    return FileGroupScheduling(config, log)
 
 
 class Compiled:

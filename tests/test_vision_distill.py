@@ -73,14 +73,27 @@ def test_vision_distillation_errors_are_one_line(soccer_teacher, tmp_path, capsy
         assert message in err and err.count("\n") == 1, err
 
 
+@pytest.fixture(scope="module")
+def dagger_student(soccer_teacher, tmp_path_factory):
+    """A tiny memoryless DAgger vision student of `soccer_teacher` (run directory, last record)."""
+    from policies.distill import start_distill
+
+    out = tmp_path_factory.mktemp("vision") / "dagger"
+    return out, start_distill(str(soccer_teacher), "dagger", str(out), timesteps=16, progress=False,
+                              task="soccer-1v1-vision")
+
+
 @pytest.mark.parametrize("method", ["kl", "dagger"])
-def test_a_vision_student_learns_from_the_state_player(soccer_teacher, tmp_path, method):
+def test_a_vision_student_learns_from_the_state_player(soccer_teacher, tmp_path, method, request):
     from policies.distill import start_distill
     from policies.policy_io import load_policy
 
-    out = tmp_path / method
-    record = start_distill(str(soccer_teacher), method, str(out), timesteps=16, progress=False,
-                           task="soccer-1v1-vision")
+    if method == "dagger":
+        out, record = request.getfixturevalue("dagger_student")
+    else:
+        out = tmp_path / method
+        record = start_distill(str(soccer_teacher), method, str(out), timesteps=16, progress=False,
+                               task="soccer-1v1-vision")
     assert record["step"] == 16
     losses = [v for k, v in record.items() if k.startswith("loss_")]
     assert losses and all(np.isfinite(losses))
@@ -297,7 +310,8 @@ def test_the_game_gives_the_placo_command_to_a_corrector_or_to_clip_an_estimatin
     assert clipped.game_gives_placo_command  # to clip its correction labels
 
 
-def test_a_memory_student_starts_from_another_remembers_forgets_on_reset_and_exports(soccer_teacher, tmp_path, capsys):
+def test_a_memory_student_starts_from_another_remembers_forgets_on_reset_and_exports(soccer_teacher, dagger_student,
+                                                                                   tmp_path, capsys):
     from policies.distill import start_distill
     from policies.export import export_onnx
     from policies.policy_io import load_policy
@@ -310,8 +324,7 @@ def test_a_memory_student_starts_from_another_remembers_forgets_on_reset_and_exp
                      str(tmp_path / method), *sum((["--set", o] for o in extra), [])]) == 2
         err = capsys.readouterr().err
         assert message in err and err.count("\n") == 1, err
-    first = tmp_path / "first"  # a memoryless student whose camera encoder the memory student starts from
-    start_distill(str(soccer_teacher), "dagger", str(first), timesteps=16, progress=False, task="soccer-1v1-vision")
+    first = dagger_student[0]  # a memoryless student whose camera encoder the memory student starts from
     record = start_distill(str(soccer_teacher), "dagger", str(tmp_path / "memory"), timesteps=16, progress=False,
                            task="soccer-1v1-vision", overrides=memory + [
                                f"distill.student_init={first}", "distill.teacher_act_fraction=0.5",
