@@ -31,10 +31,10 @@ busy after the other has finished. The other files follow in their usual order."
 
 
 SHARED_COMPILATIONS = {name: "go1-mjx" for name in ("test_envs.py", "test_mjx_vs_native.py", "test_native.py",
-                                                      "test_heightscan.py")}
-"""Files that step the session's `flat` and `confined` MJX envs run in one process: a fixture is compiled once per
-process, and tracing the two envs again in another process took minutes on a slow machine (the persistent XLA
-cache below saves their compilation, not their tracing)."""
+                                                      "test_heightscan.py", "test_follower.py")}
+"""Files that use the session's `flat` and `confined` envs run in one process: a fixture is built and compiled once
+per process, and building the confined env and tracing the two envs again in another process took minutes on a
+slow machine (the persistent XLA cache below saves their compilation, not their tracing)."""
 
 
 def _group(path: str) -> str:
