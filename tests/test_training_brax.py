@@ -18,6 +18,7 @@ import pytest
 from brax.envs.base import Env, State
 
 import policies.training as training
+from legged.envs.api import MjxEnv
 from legged.tasks import make
 from policies.export import export_onnx
 from policies.policy_io import load_policy
@@ -68,8 +69,7 @@ class SlidingBlock(Env):
     def observation_size(self):
         return {"state": (2,), "privileged_state": (4,)}
 
-    def observation_dims(self) -> dict:
-        return {k: s[0] for k, s in self.observation_size.items()}
+    observation_dims = MjxEnv.observation_dims  # the sizes as the tasks report them
 
     @property
     def action_size(self) -> int:
