@@ -121,7 +121,7 @@ def _recurrent_policy(module, payload: dict, path: Path, inputs: tuple[str, ...]
             memory[0] = None
             return
         with torch.inference_mode():
-            memory[0][:, torch.from_numpy(np.asarray(done, bool))] = 0.0
+            memory[0][:, torch.as_tensor(np.array(done, bool))] = 0.0  # a copy: done may be read-only
 
     return Policy(act=act, backend="rsl", step=payload["step"], obs_sizes=payload["obs_sizes"],
                   num_actions=payload["num_actions"], checkpoint=path, torch_module=module, inputs=inputs,

@@ -3,6 +3,7 @@ dagger|kl`): the KL loss, the errors, and a tiny distillation by each method in 
 
 import dataclasses
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -338,7 +339,11 @@ def test_a_memory_student_starts_from_another_remembers_forgets_on_reset_and_exp
            "camera": rng.random((3, *policy.obs_sizes["camera"]), dtype=np.float32)}
     first_step, second_step = policy.act(obs), policy.act(obs)
     assert np.abs(first_step - second_step).max() > 1e-6  # the same observation, another memory
-    policy.reset(np.array([True, False, False]))
+    done = np.array([True, False, False])
+    done.flags.writeable = False  # as the envs hand it; torch would warn on a read-only array
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        policy.reset(done)
     third_step = policy.act(obs)
     np.testing.assert_allclose(third_step[0], first_step[0], atol=1e-6)  # episode 0 starts afresh
     policy.reset()
