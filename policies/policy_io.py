@@ -54,9 +54,9 @@ class Policy:
         return self.obs_sizes["state"]
 
 
-def _tensor(x) -> torch.Tensor:
-    """A float32 torch tensor of a writable copy of `x` (JAX buffers are read-only)."""
-    return torch.from_numpy(np.array(x, np.float32))
+def _tensor(x, dtype=np.float32) -> torch.Tensor:
+    """A torch tensor of a writable copy of `x` (JAX buffers and env outputs may be read-only)."""
+    return torch.from_numpy(np.array(x, dtype))
 
 
 def build_actor(config: TrainConfig, obs_sizes: dict, num_actions: int):
@@ -121,7 +121,7 @@ def _recurrent_policy(module, payload: dict, path: Path, inputs: tuple[str, ...]
             memory[0] = None
             return
         with torch.inference_mode():
-            memory[0][:, torch.as_tensor(np.array(done, bool))] = 0.0  # a copy: done may be read-only
+            memory[0][:, _tensor(done, bool)] = 0.0
 
     return Policy(act=act, backend="rsl", step=payload["step"], obs_sizes=payload["obs_sizes"],
                   num_actions=payload["num_actions"], checkpoint=path, torch_module=module, inputs=inputs,
