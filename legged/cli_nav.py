@@ -34,7 +34,7 @@ def _planner_config(args):
     from planners import PlannerConfig
 
     config = PlannerConfig(planner=args.planner, time_limit=args.time_limit, seed=args.planner_seed,
-                           spacing=args.spacing, space=args.space)
+                           spacing=args.spacing, space=args.space, max_checks=args.max_checks)
     config.validate()
     return config
 
@@ -115,6 +115,9 @@ def _add_planner_options(parser) -> None:
                              "(default); full: sample all six (the earlier planner)")
     parser.add_argument("--time-limit", type=bounded(float, 0.0, 3600.0), default=5.0,
                         help="seconds an OMPL planner may search")
+    parser.add_argument("--max-checks", type=bounded(int, 0, 10**9), default=0,
+                        help="an OMPL planner also stops after this many motion checks (0: the time limit alone; "
+                             "a count gives the same search on any machine)")
     parser.add_argument("--spacing", type=bounded(float, 0.01, 10.0), default=0.5,
                         help="largest distance between waypoints, m")
     parser.add_argument("--planner-seed", type=SEED, default=0, help="seed of OMPL's sampling")

@@ -72,6 +72,9 @@ class PlannerConfig:
     quick_checks: int = 60
     """auto: motion checks RRTConnect may spend before the lattice search takes over (a count, not seconds, so
     that the same query takes the same route on every machine)."""
+    max_checks: int = 0
+    """OMPL planners: stop after this many motion checks, or at the time limit if sooner (0: the time limit
+    alone). A count makes an optimal planner's search the same on a slow or busy machine as on a fast one."""
     seed: int = 0
     """Seed of OMPL's random sampling; the same seed gives the same path (for planners that stop early)."""
     simplify: bool = True
@@ -102,6 +105,8 @@ class PlannerConfig:
         for name in ("time_limit", "quick_checks", "spacing", "angle_weight", "max_step", "check_step"):
             if getattr(self, name) <= 0:
                 raise PlanningError(f"{name} must be > 0, got {getattr(self, name)}")
+        if self.max_checks < 0:
+            raise PlanningError(f"max_checks must be >= 0 (0: the time limit alone), got {self.max_checks}")
         if not (0 <= self.max_roll < math.pi / 2 and 0 <= self.max_pitch < math.pi / 2):
             raise PlanningError("max_roll and max_pitch must lie in [0, pi/2)")
 
@@ -265,7 +270,7 @@ def plan_path(maps: HeightMaps, start, goal, robot: RobotSpec = GO1, config: Pla
         except PlanningError:
             plan = _lattice_plan(space, checker, start_pose, goal_pose, config)
             return dataclasses.replace(plan, plan_time_s=time.perf_counter() - began)
-    return _ompl_plan(space, checker, start_pose, goal_pose, config)
+    return _ompl_plan(space, checker, start_pose, goal_pose, config, max_checks=config.max_checks)
 
 
 def _ompl_plan(space, checker, start_pose, goal_pose, config: PlannerConfig, max_checks: int = 0) -> Plan:
@@ -291,7 +296,7 @@ def _ompl_plan(space, checker, start_pose, goal_pose, config: PlannerConfig, max
         setup.solve(config.time_limit)
     plan_time = setup.getLastPlanComputationTime()
     if not setup.haveExactSolutionPath():
-        limit = f"{max_checks} motion checks" if max_checks > 0 else f"{config.time_limit} s"
+        limit = f"{config.time_limit} s" + (f" or {max_checks} motion checks" if max_checks > 0 else "")
         raise PlanningError(
             f"no collision-free path from start {np.round(start_pose[:3], 3).tolist()} to goal "
             f"{np.round(goal_pose[:3], 3).tolist()} found by {name} within {limit} "
