@@ -7,6 +7,7 @@ import json
 import sys
 
 from legged.cli_nav import _print_records, add_bench_plan, add_navigation_commands
+from legged.cli_runs import add_run_commands
 from legged.cli_soccer import add_soccer_commands
 from legged.cli_args import (SEED, THREADS, Parser, add_physics_options, bounded, choices, ints, join_negative_coordinates,
                              task_names)
@@ -167,15 +168,6 @@ def cmd_eval(args) -> int:
     return 0
 
 
-def cmd_convert(args) -> int:
-    from policies.convert import convert_run
-
-    report = convert_run(args.run_dir, args.trust_pickles)
-    print(json.dumps(report) if args.json else f"[convert] {len(report['converted'])} checkpoint(s) converted in "
-          f"{report['run']}")
-    return 0
-
-
 def cmd_plot(args) -> int:
     from policies.plots import plot_runs
 
@@ -282,6 +274,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_navigation_commands(sub)
     add_soccer_commands(sub)
+    add_run_commands(sub)
     b = sub.add_parser("bench", help="benchmarks")
     bsub = b.add_subparsers(dest="what", required=True)
     add_bench_plan(bsub)
@@ -397,13 +390,6 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--json", action="store_true", help="one-line JSON")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
     ev.set_defaults(fn=cmd_eval)
-
-    cv = sub.add_parser("convert-checkpoints", help="rewrite a run's old pickled checkpoints as data-only files")
-    cv.add_argument("run_dir")
-    cv.add_argument("--trust-pickles", action="store_true",
-                    help="you trust this run: its pickles may be loaded once to convert them (pickles can run code)")
-    cv.add_argument("--json", action="store_true")
-    cv.set_defaults(fn=cmd_convert)
 
     pt = sub.add_parser("plot", help="plot a metric of runs' metrics.jsonl into a PNG (one line per run)")
     pt.add_argument("run_dir", nargs="+", help="one run directory, or several to compare")
