@@ -69,7 +69,7 @@ def _mean(values: list, weights: list[float], where: str):
 
 def _fix_normalisers(state: dict) -> None:
     """rsl-rl's empirical normaliser divides by `_std`, kept the square root of its `_var`: so here too."""
-    for key in [k for k in state if k.endswith("._var")]:
+    for key in [k for k in state if isinstance(k, str) and k.endswith("._var")]:
         std = key[: -len("_var")] + "_std"
         if std in state:
             state[std] = torch.sqrt(state[key])
