@@ -122,6 +122,10 @@ def cmd_eval(args) -> int:
     soccer = task_entry(config.task).kind == "soccer"
     if (args.opponent or args.teammate) and not soccer:
         raise ValueError(f"--opponent (or --teammate) applies to soccer tasks; {config.task} has no opponents")
+    if (args.pilot or args.oracle) and not soccer:
+        raise ValueError(f"--pilot and --oracle apply to soccer vision students; {config.task} is not soccer")
+    if args.pilot == "teacher" and not config.distill.teacher:
+        raise ValueError(f"--pilot teacher: {args.run_dir} was not distilled from a teacher; name a soccer run")
     if config.drill and (args.opponent or args.teammate):
         raise ValueError(f"{args.run_dir} trained on the {config.drill} drill, where nobody else plays: its eval "
                          f"plays the drill, without --opponent or --teammate (or use `legged drill {config.drill} "
@@ -133,8 +137,15 @@ def cmd_eval(args) -> int:
         report["ood"] = True
     if not confined:
         env_config = held_out(config.task, config.env)
+        if args.oracle:
+            env_config = dataclasses.replace(env_config, estimate_oracle=tuple(args.oracle))
+            report["oracle"] = list(args.oracle)
         env = build_env(dataclasses.replace(config, env=ood_config(env_config) if args.ood else env_config))
         check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+        if args.pilot:
+            pilot = config.distill.teacher if args.pilot == "teacher" else args.pilot
+            env.steer_with(soccer_opponent(pilot, env))
+            report["pilot"] = pilot
         samples = []
         game = soccer and not config.drill  # a drill: nobody else plays
         opponent = (soccer_opponent(args.opponent or "scripted", env),) if game else ()
@@ -387,6 +398,11 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--ood", action="store_true",
                     help="out of the training distribution: friction 0.1-0.25, +4 kg payload, motor strength "
                          "0.7-0.8, pushes 1.5x stronger (Go1 tasks)")
+    ev.add_argument("--oracle", type=lambda v: [p for p in v.split(",") if p], default=[], metavar="ball,own_goal,...",
+                    help="diagnostics: a vision player that estimates the game steers by the truth for these parts")
+    ev.add_argument("--pilot", default=None, metavar="teacher|RUN",
+                    help="a vision player that estimates the game is steered by a state player (its distillation "
+                         "teacher, or a soccer run) from its estimate")
     ev.add_argument("--json", action="store_true", help="one-line JSON")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
     ev.set_defaults(fn=cmd_eval)

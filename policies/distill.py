@@ -234,11 +234,15 @@ def check_student_init(init: Path) -> Path:
 
 def load_student_whole(student: torch.nn.Module, run_path: Path) -> None:
     """Start `student` as the student of `run_path` (`distill.student_init`, with `student_init_whole`): every
-    network and statistic; RunDirError naming the entries that do not fit."""
+    network and statistic; RunDirError naming the entries that do not fit. A state that grew at its end (e.g.
+    `env.vision_sightings` added) is taken too: the new entries reach every layer that reads the state
+    through zero weights, so the student starts acting exactly as its source did, and their normaliser's
+    statistics follow the data within a few iterations."""
     from policies.rsl_backend import load_checkpoint
 
     source = load_checkpoint(check_student_init(run_path))["alg"]["student_state_dict"]
     mine = student.state_dict()
+    source = _grown_state(source, mine, getattr(student, "cnn_latent_dim", 0))
     wrong = sorted(k for k in set(mine) | set(source) if k not in mine or k not in source
                    or tuple(source[k].shape) != tuple(mine[k].shape))
     if wrong:
@@ -246,6 +250,31 @@ def load_student_whole(student: torch.nn.Module, run_path: Path) -> None:
                           f"differently shaped: {', '.join(wrong[:8])}{' ...' if len(wrong) > 8 else ''}); drop "
                           f"distill.student_init_whole to take its camera encoder and normaliser only")
     student.load_state_dict({k: torch.as_tensor(v) for k, v in source.items()}, strict=True)
+
+
+def _grown_state(source: dict, mine: dict, image_features: int) -> dict:
+    """`source` widened to a student whose state has `grown` more entries at its end: the normaliser keeps the
+    new entries' fresh statistics (its sample count capped), and every weight matrix that reads the state
+    (the inputs [..., state, image features]) gets zero columns for them. Unchanged when nothing grew."""
+    key = "obs_normalizer._mean"
+    if key not in source or key not in mine or source[key].shape[-1] >= mine[key].shape[-1]:
+        return source
+    grown = mine[key].shape[-1] - source[key].shape[-1]
+    out = dict(source)
+    for name, value in source.items():
+        value, target = torch.as_tensor(value), mine.get(name)
+        if target is None or value.shape == target.shape:
+            continue
+        if name.startswith("obs_normalizer.") and value.dim() == 2 and target.shape[1] == value.shape[1] + grown:
+            out[name] = torch.cat([value, target[:, value.shape[1]:]], dim=1)
+        elif (name.rsplit(".", 1)[-1].startswith("weight") and value.dim() == 2 and target.shape[0] == value.shape[0]
+              and target.shape[1] == value.shape[1] + grown):
+            at = value.shape[1] - image_features  # the state ends where the image features begin
+            zeros = torch.zeros(value.shape[0], grown, dtype=value.dtype)
+            out[name] = torch.cat([value[:, :at], zeros, value[:, at:]], dim=1)
+    if "obs_normalizer.count" in out:
+        out["obs_normalizer.count"] = torch.clamp(torch.as_tensor(out["obs_normalizer.count"]), max=ADAPT_SAMPLES)
+    return out
 
 
 def load_student_encoder(student: torch.nn.Module, run_path: Path) -> None:
@@ -256,24 +285,20 @@ def load_student_encoder(student: torch.nn.Module, run_path: Path) -> None:
     does not fit."""
     from policies.rsl_backend import load_checkpoint
 
-    source = load_checkpoint(check_student_init(run_path))["alg"]["student_state_dict"]
     mine = dict(student.state_dict())
-    taken, wrong, grown = {}, [], False
+    source = _grown_state(load_checkpoint(check_student_init(run_path))["alg"]["student_state_dict"], mine,
+                          getattr(student, "cnn_latent_dim", 0))
+    taken, wrong = {}, []
     for key, value in source.items():
         if not key.startswith(("cnns.", "obs_normalizer.")) or key not in mine:
             continue
-        if value.shape == mine[key].shape:
-            taken[key] = value
-        elif key.startswith("obs_normalizer.") and value.dim() == 2 and value.shape[1] < mine[key].shape[1]:
-            taken[key] = torch.cat([value, mine[key][:, value.shape[1]:]], dim=1)  # the new entries as they are
-            grown = True
+        if tuple(value.shape) == tuple(mine[key].shape):
+            taken[key] = torch.as_tensor(value)
         else:
             wrong.append(key)
     if not any(k.startswith("cnns.") for k in taken) or wrong:
         raise RunDirError(f"distill.student_init {run_path}: its camera encoder and normaliser do not fit this student "
                           f"({'shapes differ: ' + ', '.join(wrong) if wrong else 'no camera encoder'})")
-    if grown and "obs_normalizer.count" in taken:  # the new entries' statistics must be able to move
-        taken["obs_normalizer.count"] = torch.clamp(taken["obs_normalizer.count"], max=ADAPT_SAMPLES)
     student.load_state_dict({**mine, **taken}, strict=True)
 
 

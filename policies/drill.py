@@ -75,11 +75,12 @@ def drill_player(spec: str, env: DrillEnv, checkpoint: str | None = None):
 
 def players_view(trained: SoccerConfig) -> SoccerConfig:
     """The drills' game (SoccerConfig's defaults) with what a player trained on `trained` sees and how: its head
-    camera (size, lens, tilt), the vision flags (heading, gaze)."""
+    camera (size, lens, tilt), the vision flags (heading, sightings, gaze)."""
     scene = dataclasses.replace(SoccerConfig().scene, head_camera_tilt_deg=trained.scene.head_camera_tilt_deg,
                                 head_camera_fovy_deg=trained.scene.head_camera_fovy_deg)
     return dataclasses.replace(SoccerConfig(), vision=trained.vision, camera=trained.camera, scene=scene,
-                               vision_heading=trained.vision_heading, vision_gaze=trained.vision_gaze)
+                               vision_heading=trained.vision_heading, vision_sightings=trained.vision_sightings,
+                               vision_sighted_ball=trained.vision_sighted_ball, vision_gaze=trained.vision_gaze)
 
 
 def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:

@@ -128,6 +128,8 @@ CASES = {
                                         "{d}/t8"], "not a run directory"),
     "eval: difficulty of a flat task": (["eval", "{d}/run", "--difficulty", "1"], "apply to confined tasks"),
     "eval: negative difficulty": (["eval", "{d}/run", "--difficulty", "-1"], "from 0 to 20"),
+    "eval: pilot of a flat task": (["eval", "{d}/run", "--pilot", "teacher"], "apply to soccer vision students"),
+    "eval: oracle of a flat task": (["eval", "{d}/run", "--oracle", "ball"], "apply to soccer vision students"),
     "view: too many envs": (["view", "--num-envs", "64"], "between 1 and 16"),
     "view: missing trajectory": (["view", "--trajectory", "{d}/none.npz", "--port", "0"], "not found"),
     "view: empty trajectory": (["view", "--trajectory", "{d}/empty", "--port", "0"], "{d}/empty"),

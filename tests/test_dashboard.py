@@ -35,8 +35,9 @@ WAIT_S = 600.0
 """Longest wait for the dashboard (its start, a page element, a drawing): a guard against hangs, not a speed check.
 Every wait ends as soon as its condition holds; on a machine several times slower than usual the soccer
 dashboard's start alone took over 3 minutes."""
-VISION_STUDENT = ROOT / "assets/runs/soccer-1v1-vision-wide-cpu2"
-"""A trained vision student that estimates the ball, goals and opponent from its camera (issue 18's evidence run)."""
+VISION_STUDENT = ROOT / "assets/runs/soccer-1v1-vision-sight-cpu2"
+"""A trained vision student that estimates the ball, goals and opponent from its camera and its camera's sightings of
+the ball and goals (issue 18's evidence run)."""
 
 
 def free_port() -> int:
@@ -322,8 +323,9 @@ def test_dashboard_in_headless_chromium(recorded, tmp_path):
 @pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (CI installs it: .ci/install)")
 def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
     """A vision student's rollout (a trained one that estimates the game) in the empty-goal drill shows its
-    head camera in the Camera tab, and its estimate of the ball, goals and opponent as an overlay. (The game's
-    recording of the same estimate is checked without a browser below; one browser session costs minutes.)"""
+    head camera in the Camera tab, and its estimate of the ball, goals and opponent and what its camera sights as
+    overlays. (The game's recording of the same is checked without a browser below; one browser session costs
+    minutes.)"""
     playwright = pytest.importorskip("playwright.sync_api", reason="playwright is a dev dependency")
     port = free_port()
     command = [sys.executable, "-m", "legged.cli", "view", str(VISION_STUDENT), "--physics", "native",
@@ -348,10 +350,11 @@ def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
 
             _poll(shown, WAIT_S, "the head camera image")
             page.get_by_role("tab", name="Overlays").click()
-            label = page.locator("label", has_text=OVERLAYS["estimate"])
-            label.wait_for(timeout=WAIT_S * 1000)
-            box = page.locator(f"[id='{label.get_attribute('for')}']").locator("xpath=descendant-or-self::input")
-            _poll(lambda: box.first.is_enabled() or None, WAIT_S, "the estimate overlay to be available")
+            for overlay in ("estimate", "sightings"):
+                label = page.locator("label", has_text=OVERLAYS[overlay])
+                label.wait_for(timeout=WAIT_S * 1000)
+                box = page.locator(f"[id='{label.get_attribute('for')}']").locator("xpath=descendant-or-self::input")
+                _poll(lambda: box.first.is_enabled() or None, WAIT_S, f"the {overlay} overlay to be available")
             browser.close()
     finally:
         proc.terminate()
@@ -409,7 +412,8 @@ def test_navigation_replans_round_trip_and_show_from_their_frame(recorded, serve
 
 def test_a_vision_students_estimate_of_the_game_is_recorded_in_the_world_and_shown(server, tmp_path):
     """A player that estimates the game (command_prior=placo on the vision task) has its estimate recorded as
-    world points; fed the truth, the points are the ball, the goal centres and the opponent."""
+    world points; fed the truth, the points are the ball, the goal centres and the opponent. What its camera sights
+    (vision_sightings) is recorded too, and shown only while in view."""
     from legged.soccer.learner import LearnerView
     from legged.soccer.observe import PROPRIO_SIZE
     from legged.soccer.pitch import goal_centres
@@ -417,9 +421,10 @@ def test_a_vision_students_estimate_of_the_game_is_recorded_in_the_world_and_sho
     from web.overlays import Overlays
     from web.rollout import Recorder, RecorderConfig
 
-    view = LearnerView(make("soccer-1v1-vision"), walker=load_walker("assets/policies/op3-walker", prior="placo"))
+    view = LearnerView(make("soccer-1v1-vision", vision_sightings=True),
+                       walker=load_walker("assets/policies/op3-walker", prior="placo"))
     truth = lambda obs: np.concatenate([np.zeros((len(obs["features"]), 3)), obs["features"][:, PROPRIO_SIZE:]], -1)
-    traj = Recorder(view, "soccer-1v1-vision", RecorderConfig(physics="native")).record(3, seed=0, act=truth)
+    traj = Recorder(view, "soccer-1v1-vision", RecorderConfig(physics="native")).record(3, seed=1, act=truth)
     assert traj.estimates.shape == (4, 1, 4, 3)
     for part in ("ball", "own_goal", "opponent_goal", "first_other"):  # the episode's RMS errors of the truth: 0
         np.testing.assert_allclose(traj.metrics[f"estimate_{part}_m"][1:], 0.0, atol=1e-4)
@@ -437,4 +442,19 @@ def test_a_vision_students_estimate_of_the_game_is_recorded_in_the_world_and_sho
     assert overlays.available["estimate"]
     overlays.update(2, np.zeros((0, 3)))
     np.testing.assert_allclose(overlays.nodes["estimate"][0].points, traj.estimates[2, 0], atol=1e-6)
+    assert traj.sightings.shape == (4, 1, 3, 3) and overlays.available["sightings"]
+    ball = traj.sightings[:, 0, 0]
+    in_view = np.isfinite(ball).all(-1)
+    assert in_view.all()  # measured at this seed: the ball in every frame, the goals (the default lens) in none
+    balls = traj.qpos[:, 0, layout.ball_qpos_adr:layout.ball_qpos_adr + 3]
+    assert np.abs(ball[in_view] - balls[in_view]).max() < 0.06
+    np.testing.assert_array_equal(loaded.sightings, traj.sightings)
+    overlays.update(1, np.zeros((0, 3)))
+    node, seen = overlays.nodes["sightings"][0], traj.sightings[1, 0]
+    seen = seen[np.isfinite(seen).all(-1)]
+    assert node.visible == bool(len(seen))
+    if len(seen):
+        np.testing.assert_allclose(node.points, seen, atol=1e-6)
+    overlays.set_visible("sightings", False)
+    assert not node.visible
     overlays.remove()

@@ -161,12 +161,15 @@ def test_the_named_layout_covers_the_observations_and_maps_1v1_onto_2v2():
 
     layouts = {}
     for task, extra in (("soccer-1v1", {}), ("soccer-2v2", {}), ("soccer-1v1-vision", {}),
-                        ("soccer-1v1-vision", {"vision_heading": True})):
+                        ("soccer-1v1-vision", {"vision_heading": True}),
+                        ("soccer-1v1-vision", {"vision_heading": True, "vision_sightings": True})):
         env = LearnerView(make(task, **extra))
         layouts[task] = layout = env.observation_layout()
         dims = env.observation_dims()
         assert {k: sum(n for _, n in v) for k, v in layout.items()} == {k: dims[k] for k in layout}, task
-        assert (layout["state"][-1] == ("attack_direction", 2)) == bool(extra), task
+        assert (("attack_direction", 2) in layout["state"]) == bool(extra), task
+        sightings = [("ball_sighting", 4), ("own_goal_sighting", 4), ("opponent_goal_sighting", 4)]
+        assert (layout["state"][-3:] == sightings) == ("vision_sightings" in extra), task
     names = {t: element_names(layouts[t]["state"]) for t in ("soccer-1v1", "soccer-2v2")}
     mapping = input_map(names["soccer-1v1"], names["soccer-2v2"])
     for i, name in enumerate(names["soccer-2v2"]):
@@ -198,6 +201,10 @@ def test_soccer_config_is_checked():
         SoccerConfig(end_on_fall="sometimes")
     with pytest.raises(ValueError, match="vision_heading .* needs vision"):
         SoccerConfig(vision_heading=True)
+    with pytest.raises(ValueError, match="vision_sightings .* needs vision"):
+        SoccerConfig(vision_sightings=True)
+    with pytest.raises(ValueError, match="vision_sighted_ball .* needs vision_sightings"):
+        SoccerConfig(vision=True, vision_sighted_ball=True)
     with pytest.raises(ValueError, match="randomization.ball_mass must be a range"):
         SoccerConfig(randomization=dataclasses.replace(SoccerConfig().randomization, ball_mass=(0.3, 0.1)))
 

@@ -152,18 +152,28 @@ def test_with_the_placo_prior_actions_correct_the_placo_players_command():
         TrainConfig(task="soccer-1v1", command_prior="placo").resolved()
 
 
-def test_a_gazing_vision_player_pans_its_head_toward_the_ball_it_estimates():
-    """vision_gaze: the head pan joint's action faces the estimated ball (clipped to HEAD_PAN_LIMIT); every other
-    joint is the walker's; it needs a player that estimates the game."""
-    from legged.robots.op3 import OP3
-    from legged.soccer.opponents import HEAD_PAN_LIMIT
+@pytest.fixture(scope="module")
+def estimating():
+    """(a walker with the placo prior, the first state of a vision game whose player estimates the game, gazes
+    and sights): one reset, compiled once for the tests that read it."""
     from legged.soccer.placo_player import load_tables
 
     size = PROPRIO_SIZE + 8
     walker = dataclasses.replace(_walker([(np.zeros((size, 20), np.float32), np.full(20, 0.1, np.float32))]),
                                  prior=load_tables())
-    views = {gaze: LearnerView(make("soccer-1v1-vision", vision_gaze=gaze), walker=walker) for gaze in (False, True)}
-    state = jax.tree.map(lambda x: x[0], VectorEnv.of(views[True], 1, "native", 1).reset(jax.random.PRNGKey(5)).state)
+    view = LearnerView(make("soccer-1v1-vision", vision_gaze=True, vision_sightings=True), walker=walker)
+    return walker, jax.tree.map(lambda x: x[0], VectorEnv.of(view, 1, "native", 1).reset(jax.random.PRNGKey(5)).state)
+
+
+def test_a_gazing_vision_player_pans_its_head_toward_the_ball_it_estimates(estimating):
+    """vision_gaze: the head pan joint's action faces the estimated ball (clipped to HEAD_PAN_LIMIT); every other
+    joint is the walker's; it needs a player that estimates the game."""
+    from legged.robots.op3 import OP3
+    from legged.soccer.opponents import HEAD_PAN_LIMIT
+
+    walker, state = estimating
+    views = {gaze: LearnerView(make("soccer-1v1-vision", vision_gaze=gaze, vision_sightings=True), walker=walker)
+             for gaze in (False, True)}
     action = jnp.zeros(17).at[3:5].set(jnp.asarray([1.0, 1.0]))  # no corrections; the ball 45 degrees left
     joints = {gaze: np.asarray(views[gaze].learner_actions(state, action)[0]) for gaze in (False, True)}
     assert joints[False][0] == pytest.approx(0.1, abs=1e-6)  # the walker's head
@@ -284,3 +294,49 @@ def test_getup_needs_a_walker_and_games_that_go_on_after_a_fall():
         apply_overrides(TrainConfig(task="soccer-1v1").resolved(), ["getup=up", "walker=walk", "env.end_on_fall=never"])
     assert apply_overrides(TrainConfig(task="soccer-1v1").resolved(), [
         "getup=up", "walker=walk", "env.end_on_fall=never", "env.scene.limb_floor_contacts=true"]).getup == "up"
+
+
+def test_what_a_vision_player_that_estimates_the_game_steers_by(estimating):
+    """The estimate the placo command is computed from (`used_estimate`): the network's; with vision_sighted_ball
+    the ball the camera sees, when it sees it; with estimate_oracle the truth for the parts named (diagnostics).
+    A state pilot (`steer_with`) replaces the player's own corrections by its network's at that estimate."""
+    from legged.soccer.sightings import SIGHTED, SIGHTING_SIZE
+
+    walker, state = estimating
+    size = PROPRIO_SIZE + 14  # a state player's features: proprioception and the game
+    view = lambda **extra: LearnerView(make("soccer-1v1-vision", vision_sightings=True, **extra), walker=walker)
+    plain, sighted, oracle = view(), view(vision_sighted_ball=True), view(estimate_oracle=("ball", "own_goal"))
+    action = jnp.arange(17, dtype=jnp.float32) / 10.0
+    np.testing.assert_array_equal(np.asarray(plain.used_estimate(state, action)), np.asarray(action[3:]))
+    obs = state.info["game_obs"]
+    first = obs["state"].shape[-1] - len(SIGHTED) * SIGHTING_SIZE  # the ball's sighting leads the sightings
+    for seen, expected in ((1.0, [0.7, -0.2, 0.05]), (0.0, np.asarray(action[3:6]))):
+        row = obs["state"].at[0, first:first + 4].set(jnp.asarray([seen, 0.7, -0.2, 0.05]))
+        seeing = state.replace(info={**state.info, "game_obs": {**obs, "state": row}})
+        used = np.asarray(sighted.used_estimate(seeing, action))
+        np.testing.assert_allclose(used[:3], expected, atol=1e-6)
+        np.testing.assert_array_equal(used[3:], np.asarray(action[6:]))
+    truth = np.asarray(obs["features"][0, PROPRIO_SIZE:])
+    used = np.asarray(oracle.used_estimate(state, action))
+    np.testing.assert_array_equal(used[:3], truth[:3])         # ball
+    np.testing.assert_array_equal(used[6:8], truth[6:8])       # own goal
+    np.testing.assert_array_equal(used[3:6], np.asarray(action[6:9]))  # the rest: its own
+    np.testing.assert_array_equal(used[8:], np.asarray(action[11:]))
+    piloted = view()
+    bias = np.array([0.3, -0.6, 0.2], np.float32)
+    piloted.steer_with(network_opponent(np.zeros(size), np.ones(size),
+                                        [(np.zeros((size, 3), np.float32), bias)]))
+    joints, walker_state = piloted.learner_actions(state, action)
+    expected = plain.learner_actions(state, action.at[:3].set(jnp.asarray(bias)))
+    np.testing.assert_allclose(np.asarray(joints), np.asarray(expected[0]), atol=1e-6)
+    np.testing.assert_allclose(np.asarray(walker_state), np.asarray(expected[1]), atol=1e-6)
+    with pytest.raises(ValueError, match="reads 10 features"):
+        view().steer_with(network_opponent(np.zeros(10), np.ones(10), [(np.zeros((10, 3)), np.zeros(3))]))
+    with pytest.raises(ValueError, match="unknown: goal"):
+        view(estimate_oracle=("goal",))
+    no_prior = dataclasses.replace(walker, prior=None)
+    with pytest.raises(ValueError, match="estimate_oracle replaces"):
+        LearnerView(make("soccer-1v1-vision", estimate_oracle=("ball",)), walker=no_prior)
+    with pytest.raises(ValueError, match="a state pilot steers"):
+        LearnerView(make("soccer-1v1-vision"), walker=no_prior).steer_with(network_opponent(
+            np.zeros(size), np.ones(size), [(np.zeros((size, 3)), np.zeros(3))]))

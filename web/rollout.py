@@ -48,6 +48,8 @@ class Recorder:
         self.has_head_camera = hasattr(env, "camera_images")  # soccer: the learner's head camera
         self.has_estimate = getattr(env, "estimates_world", False)  # a vision player's estimate of the game
         self._estimate = jax.jit(jax.vmap(env.estimate_points)) if self.has_estimate else None
+        self.has_sightings = getattr(getattr(env, "config", None), "vision_sightings", False)  # its camera's detector
+        self._sightings = jax.jit(jax.vmap(env.sighting_points)) if self.has_sightings else None
         if config.physics == "native":
             from legged.envs.native import NativeEnvs
 
@@ -139,6 +141,8 @@ class Recorder:
             frame["waypoint"] = np.asarray(state.info["waypoint"], np.int32)
         if "head_rgb" in extras:
             frame["camera"] = np.asarray(extras["head_rgb"], np.uint8)
+        if self.has_sightings:
+            frame["sighting"] = np.asarray(self._sightings(state), np.float32)
         return frame
 
     def _trajectory(self, frames: list[dict], extras, state, seed: int, info: dict) -> Trajectory:
@@ -158,4 +162,6 @@ class Recorder:
         if "estimate" in frames[0]:
             frames[-1].setdefault("estimate", frames[-2]["estimate"])  # the last frame acts no more
             out["estimates"] = stack("estimate")
+        if "sighting" in frames[0]:
+            out["sightings"] = stack("sighting")
         return Trajectory(**out)

@@ -18,8 +18,8 @@ import numpy as np
 FORMAT = "legged-trajectory-1"
 """Format tag stored in every file."""
 
-OPTIONAL = ("paths", "path_len", "waypoint", "goal", "floor_scan", "ceiling_scan", "camera", "estimates", "replans",
-            "replan_len", "replan_frame")
+OPTIONAL = ("paths", "path_len", "waypoint", "goal", "floor_scan", "ceiling_scan", "camera", "estimates", "sightings",
+            "replans", "replan_len", "replan_frame")
 """Arrays a trajectory may lack."""
 
 
@@ -72,6 +72,9 @@ class Trajectory:
     estimates: np.ndarray | None = None
     """World positions of what a vision player estimated from its camera (frames, envs, 4, 3): ball, own goal,
     opponent goal, first other player (legged.soccer.learner.LearnerView.estimate_points), or None."""
+    sightings: np.ndarray | None = None
+    """World positions of what a vision player's camera sighted (frames, envs, 3, 3): ball, own goal, opponent goal
+    (legged.soccer.learner.LearnerView.sighting_points), NaN where not in view, or None."""
     replans: np.ndarray | None = None
     """Paths a navigation replanned for environment 0 (replans, max_waypoints, 6), or None."""
     replan_len: np.ndarray | None = None
@@ -87,6 +90,7 @@ class Trajectory:
                   "offsets": (self.offsets, (envs,)), "waypoint": (self.waypoint, (frames, envs)),
                   "floor_scan": (self.floor_scan, (frames, envs)), "ceiling_scan": (self.ceiling_scan, (frames, envs)),
                   "camera": (self.camera, (frames, envs)), "estimates": (self.estimates, (frames, envs, 4, 3)),
+                  "sightings": (self.sightings, (frames, envs, 3, 3)),
                   "paths": (self.paths, (envs,)),
                   "path_len": (self.path_len, (envs,)), "goal": (self.goal, (envs,))}
         checks.update({f"metric {k}": (v, (frames, envs)) for k, v in self.metrics.items()})

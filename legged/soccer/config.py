@@ -116,3 +116,8 @@ class SoccerSceneConfig:
     def team_rgba(self, team: int) -> tuple[float, float, float, float]:
         """Colour of team 0 (home) or 1 (away)."""
         return (self.home_rgba, self.away_rgba)[team]
+
+    def team_net_rgba(self, team: int) -> tuple[float, float, float, float]:
+        """Colour of the net of team 0's (home) or team 1's goal: `net_rgba` tinted by the team's colour."""
+        team_rgba = self.team_rgba(team)
+        return (*(0.7 * n + 0.3 * t for n, t in zip(self.net_rgba[:3], team_rgba[:3])), self.net_rgba[3])

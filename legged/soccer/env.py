@@ -30,6 +30,8 @@ from legged.robots.op3 import OP3
 from legged.robots.spec import RobotSpec
 from legged.sensors.raycam import render
 from legged.soccer import observe, randomize, rules
+from legged.soccer.sightings import (BALL_MIN_SHADE, NET_MIN_SHADE, SIGHTED, SIGHTING_SIZE, camera_agents,
+                                     sighting)
 from legged.soccer.layout import SoccerLayout
 from legged.soccer.pitch import goal_centres, kickoff_poses
 from legged.soccer.placo_player import initial_memory
@@ -213,7 +215,23 @@ class SoccerEnv(MjxEnv):
             images = render(self.camera, data) if data.camera_rgb is None else \
                 {"rgb": data.camera_rgb, "depth": data.camera_depth}
             obs["camera"] = observe.camera_observation(images, c.camera.max_depth)
+            if c.vision_sightings:
+                obs["state"] = jnp.concatenate([obs["state"], self.sightings(data, b, images)], -1)
         return obs
+
+    def sightings(self, data, b: observe.Bodies, images: dict) -> jax.Array:
+        """[A, 3 SIGHTING_SIZE]: where each camera's image shows the ball, its robot's own goal and the opponent
+        goal (SIGHTED; zeros for robots without a camera)."""
+        c, cams = self.config, self.camera.camera_ids
+        agents = camera_agents(cams, self.layout.head_camera)
+        team = self.layout.team[agents]
+        nets = np.array([c.scene.team_net_rgba(t)[:3] for t in (0, 1)], np.float32)
+        see = lambda *object_: sighting(images["rgb"], images["depth"], self.camera.dirs, data.cam_xpos[cams],
+                                        data.cam_xmat[cams].reshape(-1, 3, 3), b.pos[agents], b.yaw[agents],
+                                        *object_, c.camera.max_depth)
+        sight = jnp.concatenate([see(c.scene.ball_rgba[:3], BALL_MIN_SHADE, 2.0 / 3.0 * c.scene.ball_radius),
+                                 see(nets[team], NET_MIN_SHADE, 0.0), see(nets[1 - team], NET_MIN_SHADE, 0.0)], -1)
+        return jnp.zeros((self.n_agents, len(SIGHTED) * SIGHTING_SIZE), jnp.float32).at[agents].set(sight)
 
     def observation_layout(self) -> dict:
         """Named slices of each player's `state` and `privileged_state` (`privileged_state` begins with the
@@ -222,6 +240,8 @@ class SoccerEnv(MjxEnv):
         state = features[:1] if self.config.vision else features
         if self.config.vision_heading:
             state = state + [("attack_direction", observe.HEADING_SIZE)]
+        if self.config.vision_sightings:
+            state = state + [(f"{name}_sighting", SIGHTING_SIZE) for name in SIGHTED]
         return {"state": state, "privileged_state": [(f"state/{n}", k) for n, k in features]
                 + [("truth", observe.PRIVILEGED_SIZE)]}
 

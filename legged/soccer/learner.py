@@ -20,8 +20,10 @@ from legged.envs.physics import PhysicsView, Spawn
 from legged.sensors.raycam import render
 from legged.soccer.env import SoccerEnv
 from legged.soccer.observe import PROPRIO_SIZE, feature_layout, read_bodies
-from legged.soccer.opponents import Opponent, OpponentNet, ball_pan, opponent_step, scripted_opponent
+from legged.soccer.opponents import (Opponent, OpponentNet, ball_pan, network_actions, opponent_step,
+                                     scripted_opponent)
 from legged.soccer.placo_player import load_tables
+from legged.soccer.sightings import SIGHTED, SIGHTING_SIZE
 from legged.soccer.vision import soccer_camera
 from legged.soccer.walker import COMMAND_SIZE, Walker, getting_up
 
@@ -82,9 +84,32 @@ class LearnerView(MjxEnv):
         self.default_opponent = scripted_opponent(game.policy_state_size, self.player_action_size, hidden)
         self.estimate_parts = estimate_parts(game.layout.players_per_team)
         """Positions of the learner's estimate whose errors are reported (`estimates_world`)."""
+        self._world_parts = layout_slices(feature_layout(game.layout.players_per_team)[1:])
+        unknown = sorted(set(game.config.estimate_oracle) - set(self._world_parts))
+        if game.config.estimate_oracle and (not self.estimates_world or unknown):
+            raise ValueError(f"estimate_oracle replaces parts of a game-estimating vision player's estimate "
+                             f"(command_prior=placo) by the truth; parts are {', '.join(self._world_parts)}"
+                             + (f" (unknown: {', '.join(unknown)})" if unknown else ""))
         self.tables = load_tables()
         """The placo player's walk and kick (legged.soccer.placo_player)."""
         self._camera = None
+        self.state_pilot: Opponent | None = None
+        """A state player's network (an Opponent) that steers a game-estimating vision player from its estimate
+        (`steer_with`); None: the player's own corrections do."""
+
+    def steer_with(self, pilot: Opponent) -> None:
+        """Let the state player `pilot` (a soccer-1v1 run whose commands correct the placo player's, as an
+        Opponent) steer this vision player: its command is the pilot's at [proprioception, the player's
+        estimate of the game], so the vision network only has to see (the player's own corrections are unused).
+        Set before the first step is compiled."""
+        if not self.estimates_world:
+            raise ValueError("a state pilot steers from a vision player's estimate of the game: it needs a player "
+                             "that estimates the game (command_prior=placo)")
+        width = PROPRIO_SIZE + self.world_size
+        if pilot.mean.shape[-1] != width:
+            raise ValueError(f"the pilot reads {pilot.mean.shape[-1]} features, this player's proprioception and "
+                             f"estimate are {width}")
+        self.state_pilot = pilot
 
     def camera_images(self, data) -> jax.Array:
         """RGB image of the learner's head camera, [H, W, 3] uint8 (the ray renderer at the task's camera
@@ -137,7 +162,10 @@ class LearnerView(MjxEnv):
         features = state.info["game_obs"]["state"][LEARNER:LEARNER + 1]
         proprio = features[:, :PROPRIO_SIZE]
         if self.estimates_world:  # the placo command from what it sees, not from the truth
-            action, features = action[:COMMAND_SIZE], jnp.concatenate([proprio, action[None, COMMAND_SIZE:]], -1)
+            estimate = self.used_estimate(state, action)
+            action, features = action[:COMMAND_SIZE], jnp.concatenate([proprio, estimate[None]], -1)
+            if self.state_pilot is not None:  # the state player's corrections at the estimated state
+                action = network_actions(self.net, self.state_pilot, features)[0]
         mine = walker_state[LEARNER:LEARNER + 1]
         action = self.walker.with_prior(action[None], features)[0]
         joints = self.walker.actions(proprio, action[None], mine)[0]
@@ -156,16 +184,41 @@ class LearnerView(MjxEnv):
         """Length of the learner's estimate of the game features among its actions (0 unless `estimates_world`)."""
         return self.game.policy_state_size - PROPRIO_SIZE if self.estimates_world else 0
 
+    def used_estimate(self, state: State, action: jax.Array) -> jax.Array:
+        """The game features (`world_size`) the learner's placo command is computed from (`estimates_world`): its
+        estimate among its `action`, with the ball where the camera sees it under `vision_sighted_ball` and the
+        parts named in `estimate_oracle` true."""
+        world = action[COMMAND_SIZE:]
+        if self.config.vision_sighted_ball:
+            first = -len(SIGHTED) * SIGHTING_SIZE  # the ball's sighting leads: seen, then x, y, z
+            sighting = state.info["game_obs"]["state"][LEARNER, first:first + SIGHTING_SIZE]
+            ball = self.estimate_parts["ball"]
+            world = world.at[ball].set(jnp.where(sighting[0] > 0, sighting[1:], world[ball]))
+        truth = state.info["game_obs"]["features"][LEARNER, PROPRIO_SIZE:]
+        for name in self.config.estimate_oracle:  # diagnostics: the truth for these parts
+            world = world.at[self._world_parts[name]].set(truth[self._world_parts[name]])
+        return world
+
     def estimate_points(self, state: State, action: jax.Array) -> jax.Array:
         """World positions [4, 3] of what the learner's `action` estimates (`estimates_world`): the ball, its own
         goal, the opponent goal and the first other player (its teammate in 2v2), the last three on the ground;
         jittable."""
-        world = action[COMMAND_SIZE:]
+        world = self.used_estimate(state, action)
         b = read_bodies(self.game.layout, state.pipeline_state.qpos, state.pipeline_state.qvel)
         ego = jnp.stack([world[part][:2] for part in self.estimate_parts.values()])
         xy = b.pos[LEARNER, :2] + yaw_rotate(-b.yaw[LEARNER], ego)
         z = jnp.array([b.pos[LEARNER, 2] + world[2], 0.0, 0.0, 0.0])
         return jnp.concatenate([xy, z[:, None]], -1)
+
+    def sighting_points(self, state: State) -> jax.Array:
+        """World positions [3, 3] of what the learner's camera sights (`vision_sightings`: the ball, its own goal's
+        net, the opponent goal's net), NaN where not in view; jittable."""
+        first = -len(SIGHTED) * SIGHTING_SIZE
+        sight = state.info["game_obs"]["state"][LEARNER, first:].reshape(len(SIGHTED), SIGHTING_SIZE)
+        b = read_bodies(self.game.layout, state.pipeline_state.qpos, state.pipeline_state.qvel)
+        xy = b.pos[LEARNER, :2] + yaw_rotate(-b.yaw[LEARNER], sight[:, 1:3])
+        points = jnp.concatenate([xy, b.pos[LEARNER, 2] + sight[:, 3:]], -1)
+        return jnp.where(sight[:, :1] > 0, points, jnp.nan)
 
     @property
     def action_size(self) -> int:
@@ -178,7 +231,7 @@ class LearnerView(MjxEnv):
         if not self.estimates_world:
             return None
         truth = state.info["game_obs"]["features"][LEARNER, PROPRIO_SIZE:]
-        error = action[COMMAND_SIZE:] - truth
+        error = self.used_estimate(state, action) - truth
         sq = jnp.stack([jnp.sum(error[part] ** 2) for part in self.estimate_parts.values()])
         ball = self.estimate_parts["ball"]
         near = (jnp.linalg.norm(truth[ball][:2]) < NEAR_BALL_M).astype(sq.dtype)

@@ -78,8 +78,7 @@ def _add_pitch(spec: mujoco.MjSpec, config: SoccerSceneConfig) -> None:
                      ((x0 + x1) / 2, (y0 + y1) / 2, _LINE_HALF_THICKNESS), config.line_rgba, LINE_GROUP,
                      _yaw_quat(yaw))
     for team in range(2):
-        net_rgba = 0.7 * np.asarray(config.net_rgba) + 0.3 * np.asarray(config.team_rgba(team))
-        net_rgba[3] = config.net_rgba[3]
+        net_rgba = config.team_net_rgba(team)
         for box in goal_boxes(config, team):
             rgba = config.post_rgba if box.part == "post" else net_rgba
             _static_geom(world, box.name, mujoco.mjtGeom.mjGEOM_BOX, box.half, box.pos, rgba, 0)

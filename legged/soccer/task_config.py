@@ -71,6 +71,18 @@ class SoccerConfig(EnvConfig):
     """Size and appearance of the head camera images."""
     vision_heading: bool = False
     """With `vision`: 'state' also ends with the attacking direction in the agent's heading frame (an IMU's yaw)."""
+    vision_sightings: bool = False
+    """With `vision`: 'state' also ends with where the head camera's image shows the ball, the own goal's net and
+    the opponent goal's net (a colour-and-depth detector, legged.soccer.sightings: for each seen, then x, y, z in
+    the heading frame; zeros when not in view)."""
+    vision_sighted_ball: bool = False
+    """With `vision_sightings`, for a player that estimates the game (command_prior=placo): the placo command
+    takes the ball's position from the sighting whenever the camera sees the ball, from the player's own
+    estimate otherwise (a detector's measurement trusted over the network's regression)."""
+    estimate_oracle: tuple[str, ...] = ()
+    """Diagnostics only, not a deployable player: for a player that estimates the game, these parts of its
+    estimate (ball, ball_vel, own_goal, opponent_goal, opponent0, ...) are replaced by the truth before the placo
+    command is computed, to measure which estimate limits its play (`legged eval RUN --oracle ball`)."""
     vision_gaze: bool = False
     """With `vision`, for a player that estimates the game (command_prior=placo): its head pans toward where it
     estimates the ball to be (legged.soccer.opponents.ball_pan), keeping the ball in view; false: the walker
@@ -90,6 +102,11 @@ class SoccerConfig(EnvConfig):
             raise ValueError("spawn_spread and restart_inset must be non-negative")
         if self.vision_gaze and not self.vision:
             raise ValueError("vision_gaze turns a vision player's head toward the ball it estimates: it needs vision")
+        if self.vision_sightings and not self.vision:
+            raise ValueError("vision_sightings adds where the head camera sees the ball and the goals to a vision "
+                             "player's state: it needs vision")
+        if self.vision_sighted_ball and not self.vision_sightings:
+            raise ValueError("vision_sighted_ball steers by the ball the camera sees: it needs vision_sightings")
         if self.vision_heading and not self.vision:
             raise ValueError("vision_heading adds the attacking direction to a vision player's state: it needs vision")
         if 2 * self.restart_inset >= min(self.scene.field_length, self.scene.field_width):
