@@ -190,8 +190,7 @@ class LearnerView(MjxEnv):
         parts named in `estimate_oracle` true."""
         world = action[COMMAND_SIZE:]
         if self.config.vision_sighted_ball:
-            first = -len(SIGHTED) * SIGHTING_SIZE  # the ball's sighting leads: seen, then x, y, z
-            sighting = state.info["game_obs"]["state"][LEARNER, first:first + SIGHTING_SIZE]
+            sighting = self._sightings(state)[0]  # the ball's: seen, then x, y, z
             ball = self.estimate_parts["ball"]
             world = world.at[ball].set(jnp.where(sighting[0] > 0, sighting[1:], world[ball]))
         truth = state.info["game_obs"]["features"][LEARNER, PROPRIO_SIZE:]
@@ -204,21 +203,28 @@ class LearnerView(MjxEnv):
         goal, the opponent goal and the first other player (its teammate in 2v2), the last three on the ground;
         jittable."""
         world = self.used_estimate(state, action)
-        b = read_bodies(self.game.layout, state.pipeline_state.qpos, state.pipeline_state.qvel)
         ego = jnp.stack([world[part][:2] for part in self.estimate_parts.values()])
-        xy = b.pos[LEARNER, :2] + yaw_rotate(-b.yaw[LEARNER], ego)
-        z = jnp.array([b.pos[LEARNER, 2] + world[2], 0.0, 0.0, 0.0])
+        xy, height = self._in_world(state, ego)
+        z = jnp.array([height + world[2], 0.0, 0.0, 0.0])
         return jnp.concatenate([xy, z[:, None]], -1)
 
     def sighting_points(self, state: State) -> jax.Array:
         """World positions [3, 3] of what the learner's camera sights (`vision_sightings`: the ball, its own goal's
         net, the opponent goal's net), NaN where not in view; jittable."""
-        first = -len(SIGHTED) * SIGHTING_SIZE
-        sight = state.info["game_obs"]["state"][LEARNER, first:].reshape(len(SIGHTED), SIGHTING_SIZE)
-        b = read_bodies(self.game.layout, state.pipeline_state.qpos, state.pipeline_state.qvel)
-        xy = b.pos[LEARNER, :2] + yaw_rotate(-b.yaw[LEARNER], sight[:, 1:3])
-        points = jnp.concatenate([xy, b.pos[LEARNER, 2] + sight[:, 3:]], -1)
+        sight = self._sightings(state)
+        xy, height = self._in_world(state, sight[:, 1:3])
+        points = jnp.concatenate([xy, height + sight[:, 3:]], -1)
         return jnp.where(sight[:, :1] > 0, points, jnp.nan)
+
+    def _sightings(self, state: State) -> jax.Array:
+        """The learner's sightings (`vision_sightings`, the end of its state), [len(SIGHTED), SIGHTING_SIZE]."""
+        first = -len(SIGHTED) * SIGHTING_SIZE
+        return state.info["game_obs"]["state"][LEARNER, first:].reshape(len(SIGHTED), SIGHTING_SIZE)
+
+    def _in_world(self, state: State, ego: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """(world x, y [k, 2] of points `ego` [k, 2] in the learner's heading frame, the learner's torso height)."""
+        b = read_bodies(self.game.layout, state.pipeline_state.qpos, state.pipeline_state.qvel)
+        return b.pos[LEARNER, :2] + yaw_rotate(-b.yaw[LEARNER], ego), b.pos[LEARNER, 2]
 
     @property
     def action_size(self) -> int:
