@@ -122,8 +122,9 @@ def cmd_eval(args) -> int:
     soccer = task_entry(config.task).kind == "soccer"
     if (args.opponent or args.teammate) and not soccer:
         raise ValueError(f"--opponent (or --teammate) applies to soccer tasks; {config.task} has no opponents")
-    if (args.pilot or args.oracle) and not soccer:
-        raise ValueError(f"--pilot and --oracle apply to soccer vision students; {config.task} is not soccer")
+    if (args.pilot or args.oracle or args.tracker) and not soccer:
+        raise ValueError(f"--pilot, --oracle and --tracker apply to soccer vision students; {config.task} is not "
+                         f"soccer")
     if args.pilot == "teacher" and not config.distill.teacher:
         raise ValueError(f"--pilot teacher: {args.run_dir} was not distilled from a teacher; name a soccer run")
     if config.drill and (args.opponent or args.teammate):
@@ -140,6 +141,9 @@ def cmd_eval(args) -> int:
         if args.oracle:
             env_config = dataclasses.replace(env_config, estimate_oracle=tuple(args.oracle))
             report["oracle"] = list(args.oracle)
+        if args.tracker:
+            env_config = dataclasses.replace(env_config, vision_tracker=True)
+            report["tracker"] = True
         env = build_env(dataclasses.replace(config, env=ood_config(env_config) if args.ood else env_config))
         check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
         if args.pilot:
@@ -403,6 +407,9 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--pilot", default=None, metavar="teacher|RUN",
                     help="a vision player that estimates the game is steered by a state player (its distillation "
                          "teacher, or a soccer run) from its estimate")
+    ev.add_argument("--tracker", action="store_true",
+                    help="a vision player that estimates the game steers by its tracker's goals and ball where it "
+                         "knows them (env.vision_tracker, legged.soccer.tracker)")
     ev.add_argument("--json", action="store_true", help="one-line JSON")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
     ev.set_defaults(fn=cmd_eval)

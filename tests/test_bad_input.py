@@ -130,6 +130,7 @@ CASES = {
     "eval: negative difficulty": (["eval", "{d}/run", "--difficulty", "-1"], "from 0 to 20"),
     "eval: pilot of a flat task": (["eval", "{d}/run", "--pilot", "teacher"], "apply to soccer vision students"),
     "eval: oracle of a flat task": (["eval", "{d}/run", "--oracle", "ball"], "apply to soccer vision students"),
+    "eval: tracker of a flat task": (["eval", "{d}/run", "--tracker"], "apply to soccer vision students"),
     "view: too many envs": (["view", "--num-envs", "64"], "between 1 and 16"),
     "view: missing trajectory": (["view", "--trajectory", "{d}/none.npz", "--port", "0"], "not found"),
     "view: empty trajectory": (["view", "--trajectory", "{d}/empty", "--port", "0"], "{d}/empty"),

@@ -12,6 +12,7 @@ import time
 from contextlib import redirect_stderr
 from pathlib import Path
 
+import jax
 import jax.numpy as jnp
 import mujoco
 import numpy as np
@@ -35,9 +36,9 @@ WAIT_S = 600.0
 """Longest wait for the dashboard (its start, a page element, a drawing): a guard against hangs, not a speed check.
 Every wait ends as soon as its condition holds; on a machine several times slower than usual the soccer
 dashboard's start alone took over 3 minutes."""
-VISION_STUDENT = ROOT / "assets/runs/soccer-1v1-vision-sight-cpu2"
+VISION_STUDENT = ROOT / "assets/runs/soccer-1v1-vision-tracker-cpu2"
 """A trained vision student that estimates the ball, goals and opponent from its camera and its camera's sightings of
-the ball and goals (issue 18's evidence run)."""
+the ball and goals, and steers by its tracker (issue 18's evidence run)."""
 
 
 def free_port() -> int:
@@ -322,14 +323,14 @@ def test_dashboard_in_headless_chromium(recorded, tmp_path):
 
 @pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (CI installs it: .ci/install)")
 def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
-    """A vision student's rollout (a trained one that estimates the game) in the empty-goal drill shows its
-    head camera in the Camera tab, and its estimate of the ball, goals and opponent and what its camera sights as
-    overlays. (The game's recording of the same is checked without a browser below; one browser session costs
-    minutes.)"""
+    """A vision student's rollout (a trained one that estimates the game and has a tracker) in a game shows its
+    head camera in the Camera tab, and its estimate of the ball, goals and opponent, what its camera sights and
+    where its tracker puts it as overlays. (The recording of the same is checked without a browser below; one
+    browser session costs minutes.)"""
     playwright = pytest.importorskip("playwright.sync_api", reason="playwright is a dev dependency")
     port = free_port()
     command = [sys.executable, "-m", "legged.cli", "view", str(VISION_STUDENT), "--physics", "native",
-               "--steps", "10", "--port", str(port), "--drill", "empty-goal"]
+               "--steps", "10", "--port", str(port)]
     proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             env={**os.environ, "PYTHONUNBUFFERED": "1"})
     try:
@@ -350,7 +351,7 @@ def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
 
             _poll(shown, WAIT_S, "the head camera image")
             page.get_by_role("tab", name="Overlays").click()
-            for overlay in ("estimate", "sightings"):
+            for overlay in ("estimate", "sightings", "tracked"):
                 label = page.locator("label", has_text=OVERLAYS[overlay])
                 label.wait_for(timeout=WAIT_S * 1000)
                 box = page.locator(f"[id='{label.get_attribute('for')}']").locator("xpath=descendant-or-self::input")
@@ -456,5 +457,46 @@ def test_a_vision_students_estimate_of_the_game_is_recorded_in_the_world_and_sho
     if len(seen):
         np.testing.assert_allclose(node.points, seen, atol=1e-6)
     overlays.set_visible("sightings", False)
+    assert not node.visible
+    overlays.remove()
+
+
+def test_a_vision_students_tracked_pose_is_recorded_and_shown(server, tmp_path):
+    """A player with a tracker (vision_tracker) has where its tracker puts it recorded: its torso and a point
+    ahead along its tracked heading once locked on, NaN before; the overlay shows it only once locked on."""
+    import dataclasses
+
+    from legged.envs.vector import VectorEnv
+    from legged.soccer.learner import TRACKED_ARROW_M, LearnerView
+    from legged.soccer.observe import read_bodies
+    from legged.soccer.tracker import tracker_kickoff, tracker_start
+    from policies.policy_io import load_walker
+    from web.overlays import Overlays
+    from web.rollout import Recorder, RecorderConfig
+
+    view = LearnerView(make("soccer-1v1-vision", vision_tracker=True),
+                       walker=load_walker("assets/policies/op3-walker", prior="placo"))
+    traj = Recorder(view, "soccer-1v1-vision", RecorderConfig(physics="native")).record(2, seed=1)
+    assert traj.tracked.shape == (3, 1, 2, 3)
+    state = jax.tree.map(lambda x: x[0], VectorEnv.of(view, 1, "native", 1).reset(jax.random.PRNGKey(1)).state)
+    height = float(read_bodies(view.game.layout, state.pipeline_state.qpos, state.pipeline_state.qvel).pos[0, 2])
+    placed = lambda tracker: np.asarray(view.tracked_points(state.replace(info={**state.info, "tracker": tracker})))
+    ahead = [0.5 + TRACKED_ARROW_M * np.cos(0.3), -0.2 + TRACKED_ARROW_M * np.sin(0.3), height]
+    np.testing.assert_allclose(placed(tracker_kickoff(jnp.array([0.5, -0.2, 0.3]))), [[0.5, -0.2, height], ahead],
+                               atol=1e-5)
+    assert np.isnan(placed(tracker_start(jnp.array([0.5, -0.2, 0.3])))).all()  # not locked on yet
+    tracked = np.full((3, 1, 2, 3), np.nan, np.float32)
+    tracked[2, 0] = [[0.5, -0.2, height], ahead]
+    loaded = load_trajectory(dataclasses.replace(traj, tracked=tracked).save(tmp_path / "tracked.npz"))
+    np.testing.assert_array_equal(loaded.tracked, tracked)
+    overlays = Overlays(server.scene, loaded)
+    assert overlays.available["tracked"]
+    node = overlays.nodes["tracked"][0]
+    overlays.update(1, np.zeros((0, 3)))
+    assert not node.visible
+    overlays.update(2, np.zeros((0, 3)))
+    assert node.visible
+    np.testing.assert_allclose(node.points, tracked[2, 0], atol=1e-6)
+    overlays.set_visible("tracked", False)
     assert not node.visible
     overlays.remove()

@@ -309,10 +309,11 @@ def test_what_a_vision_player_that_estimates_the_game_steers_by(estimating):
     action = jnp.arange(17, dtype=jnp.float32) / 10.0
     np.testing.assert_array_equal(np.asarray(plain.used_estimate(state, action)), np.asarray(action[3:]))
     obs = state.info["game_obs"]
-    first = obs["state"].shape[-1] - len(SIGHTED) * SIGHTING_SIZE  # the ball's sighting leads the sightings
+    first = obs["state"].shape[-1] - len(SIGHTED) * SIGHTING_SIZE  # the state ends with the sightings, kept in info
+    np.testing.assert_array_equal(np.asarray(obs["state"][:, first:]), np.asarray(state.info["sightings"]))
     for seen, expected in ((1.0, [0.7, -0.2, 0.05]), (0.0, np.asarray(action[3:6]))):
-        row = obs["state"].at[0, first:first + 4].set(jnp.asarray([seen, 0.7, -0.2, 0.05]))
-        seeing = state.replace(info={**state.info, "game_obs": {**obs, "state": row}})
+        row = state.info["sightings"].at[0, :4].set(jnp.asarray([seen, 0.7, -0.2, 0.05]))  # the ball's leads
+        seeing = state.replace(info={**state.info, "sightings": row})
         used = np.asarray(sighted.used_estimate(seeing, action))
         np.testing.assert_allclose(used[:3], expected, atol=1e-6)
         np.testing.assert_array_equal(used[3:], np.asarray(action[6:]))

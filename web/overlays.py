@@ -1,6 +1,7 @@
 """Switchable overlays of a trajectory: planned path and waypoints, current target, height-scan points
 (floor and ceiling), contact points, the goal, a navigation's replanned paths (each shown from the frame
-it was made on), a vision player's estimate of the ball, goals and opponent, and what its camera sighted."""
+it was made on), a vision player's estimate of the ball, goals and opponent, what its camera sighted and where its
+tracker puts it."""
 
 from __future__ import annotations
 
@@ -13,13 +14,14 @@ OVERLAYS = {"path": "planned path and waypoints", "target": "current target wayp
             "floor_scan": "floor height scan", "ceiling_scan": "ceiling height scan",
             "contacts": "contact points", "goal": "goal", "replans": "replanned paths (navigation)",
             "estimate": "estimated ball, goals, opponent (vision student)",
-            "sightings": "ball and goals the camera sees (vision student's detector)"}
+            "sightings": "ball and goals the camera sees (vision student's detector)",
+            "tracked": "where the vision student's tracker puts itself (torso and heading)"}
 """Overlay name -> what it shows (the dashboard's checkbox labels)."""
 
 COLOURS = {"path": (40, 120, 255), "target": (255, 140, 0), "floor_scan": (30, 190, 90),
            "ceiling_scan": (220, 60, 200), "contacts": (230, 20, 20), "goal": (20, 200, 60),
            "replans": (150, 70, 230), "estimate": (255, 230, 0),
-           "sightings": (0, 220, 255)}
+           "sightings": (0, 220, 255), "tracked": (255, 0, 200)}
 """Overlay colours (RGB)."""
 
 
@@ -52,7 +54,7 @@ class Overlays:
         return {"path": t.paths is not None, "target": t.waypoint is not None, "floor_scan": t.floor_scan is not None,
                 "ceiling_scan": t.ceiling_scan is not None, "contacts": True, "goal": t.goal is not None,
                 "replans": t.replans is not None, "estimate": t.estimates is not None,
-                "sightings": t.sightings is not None}
+                "sightings": t.sightings is not None, "tracked": t.tracked is not None}
 
     def _points(self, name, points, kind, size):
         return self.scene.add_point_cloud(name, np.asarray(points, np.float32), COLOURS[kind], point_size=size,
@@ -97,8 +99,20 @@ class Overlays:
                                    ("estimate", t.estimates, 0.09)):
             if points is not None:
                 self.nodes[kind].append(self._points(f"{root}/{kind}", points[0, env] + t.offsets[env], kind, size))
-        if t.sightings is not None:
-            self.nodes["sightings"].append(self._points(f"{root}/sightings", np.zeros((1, 3)), "sightings", 0.12))
+        for kind, points, size in (("sightings", t.sightings, 0.12), ("tracked", t.tracked, 0.07)):
+            if points is not None:  # placed at each frame (update)
+                self.nodes[kind].append(self._points(f"{root}/{kind}", np.zeros((1, 3)), kind, size))
+
+    def _place_finite(self, kind: str, env: int, points: np.ndarray) -> None:
+        """Show environment `env`'s `kind` node at the finite rows of `points` (k, 3), hidden when there are none."""
+        points = points[np.isfinite(points).all(-1)]
+        node, key = self.nodes[kind][env], (kind, env)
+        if len(points):
+            node.points = points.astype(np.float32)
+            self._empty.discard(key)
+        else:
+            self._empty.add(key)
+        node.visible = self.shown[kind] and key not in self._empty
 
     def update(self, frame: int, contacts: np.ndarray) -> None:
         """Move the per-frame overlays to `frame`; `contacts` are world contact points (k, 3) of all envs."""
@@ -120,16 +134,9 @@ class Overlays:
                                  ("estimate", t.estimates)):
                 if self.nodes[kind]:
                     self.nodes[kind][env].points = (points[frame, env] + offset).astype(np.float32)
-            if self.nodes["sightings"]:  # only what is in view at this frame
-                seen = t.sightings[frame, env]
-                seen = seen[np.isfinite(seen).all(-1)]
-                node, key = self.nodes["sightings"][env], ("sightings", env)
-                if len(seen):
-                    node.points = (seen + offset).astype(np.float32)
-                    self._empty.discard(key)
-                else:
-                    self._empty.add(key)
-                node.visible = self.shown["sightings"] and key not in self._empty
+            for kind, points in (("sightings", t.sightings), ("tracked", t.tracked)):
+                if self.nodes[kind]:  # only what there is at this frame (in view; locked on)
+                    self._place_finite(kind, env, points[frame, env] + offset)
         handle = self.nodes["contacts"][0]
         if len(contacts):
             handle.points = np.asarray(contacts, np.float32)

@@ -50,6 +50,9 @@ class Recorder:
         self._estimate = jax.jit(jax.vmap(env.estimate_points)) if self.has_estimate else None
         self.has_sightings = getattr(getattr(env, "config", None), "vision_sightings", False)  # its camera's detector
         self._sightings = jax.jit(jax.vmap(env.sighting_points)) if self.has_sightings else None
+        self.has_tracker = getattr(getattr(env, "config", None), "vision_tracker", False) and \
+            hasattr(env, "tracked_points")  # where its tracker puts it (not in drills)
+        self._tracked = jax.jit(jax.vmap(env.tracked_points)) if self.has_tracker else None
         if config.physics == "native":
             from legged.envs.native import NativeEnvs
 
@@ -143,6 +146,8 @@ class Recorder:
             frame["camera"] = np.asarray(extras["head_rgb"], np.uint8)
         if self.has_sightings:
             frame["sighting"] = np.asarray(self._sightings(state), np.float32)
+        if self.has_tracker:
+            frame["tracked"] = np.asarray(self._tracked(state), np.float32)
         return frame
 
     def _trajectory(self, frames: list[dict], extras, state, seed: int, info: dict) -> Trajectory:
@@ -164,4 +169,6 @@ class Recorder:
             out["estimates"] = stack("estimate")
         if "sighting" in frames[0]:
             out["sightings"] = stack("sighting")
+        if "tracked" in frames[0]:
+            out["tracked"] = stack("tracked")
         return Trajectory(**out)

@@ -19,7 +19,7 @@ FORMAT = "legged-trajectory-1"
 """Format tag stored in every file."""
 
 OPTIONAL = ("paths", "path_len", "waypoint", "goal", "floor_scan", "ceiling_scan", "camera", "estimates", "sightings",
-            "replans", "replan_len", "replan_frame")
+            "tracked", "replans", "replan_len", "replan_frame")
 """Arrays a trajectory may lack."""
 
 
@@ -75,6 +75,9 @@ class Trajectory:
     sightings: np.ndarray | None = None
     """World positions of what a vision player's camera sighted (frames, envs, 3, 3): ball, own goal, opponent goal
     (legged.soccer.learner.LearnerView.sighting_points), NaN where not in view, or None."""
+    tracked: np.ndarray | None = None
+    """Where a vision player's tracker put its torso, and a point ahead along its tracked heading (frames, envs, 2,
+    3; legged.soccer.learner.LearnerView.tracked_points), NaN before it locked on, or None."""
     replans: np.ndarray | None = None
     """Paths a navigation replanned for environment 0 (replans, max_waypoints, 6), or None."""
     replan_len: np.ndarray | None = None
@@ -90,7 +93,7 @@ class Trajectory:
                   "offsets": (self.offsets, (envs,)), "waypoint": (self.waypoint, (frames, envs)),
                   "floor_scan": (self.floor_scan, (frames, envs)), "ceiling_scan": (self.ceiling_scan, (frames, envs)),
                   "camera": (self.camera, (frames, envs)), "estimates": (self.estimates, (frames, envs, 4, 3)),
-                  "sightings": (self.sightings, (frames, envs, 3, 3)),
+                  "sightings": (self.sightings, (frames, envs, 3, 3)), "tracked": (self.tracked, (frames, envs, 2, 3)),
                   "paths": (self.paths, (envs,)),
                   "path_len": (self.path_len, (envs,)), "goal": (self.goal, (envs,))}
         checks.update({f"metric {k}": (v, (frames, envs)) for k, v in self.metrics.items()})

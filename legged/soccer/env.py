@@ -192,6 +192,8 @@ class SoccerEnv(MjxEnv):
 
     # ----------------------------------------------------------------- observations
     def _observe(self, data, info: dict, rng) -> dict:
+        """Every player's observations; with `vision_sightings` or `vision_tracker` the camera's sightings
+        (`sightings`) are also put in `info['sightings']`."""
         c = self.config
         b = observe.read_bodies(self.layout, data.qpos, data.qvel)
         proprio = observe.proprioception(b, self._default_pose, info["last_action"])
@@ -215,8 +217,10 @@ class SoccerEnv(MjxEnv):
             images = render(self.camera, data) if data.camera_rgb is None else \
                 {"rgb": data.camera_rgb, "depth": data.camera_depth}
             obs["camera"] = observe.camera_observation(images, c.camera.max_depth)
+            if c.vision_sightings or c.vision_tracker:  # kept in info too, for the learner's tracker and viewers
+                info["sightings"] = self.sightings(data, b, images)
             if c.vision_sightings:
-                obs["state"] = jnp.concatenate([obs["state"], self.sightings(data, b, images)], -1)
+                obs["state"] = jnp.concatenate([obs["state"], info["sightings"]], -1)
         return obs
 
     def sightings(self, data, b: observe.Bodies, images: dict) -> jax.Array:

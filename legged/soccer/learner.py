@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from brax.envs.base import State
 
 from legged.envs.api import MjxEnv, layout_slices
@@ -24,6 +25,8 @@ from legged.soccer.opponents import (Opponent, OpponentNet, ball_pan, network_ac
                                      scripted_opponent)
 from legged.soccer.placo_player import load_tables
 from legged.soccer.sightings import SIGHTED, SIGHTING_SIZE
+from legged.soccer.tracker import (tracked_features, tracked_pose, tracker_kickoff, tracker_sight, tracker_start,
+                                   tracker_step)
 from legged.soccer.vision import soccer_camera
 from legged.soccer.walker import COMMAND_SIZE, Walker, getting_up
 
@@ -31,6 +34,8 @@ LEARNER = 0
 """Agent index the learner controls."""
 HEAD_PAN = 0
 """Index of the head pan joint in the OP3's joint actions (RobotSpec.joint_names)."""
+TRACKED_ARROW_M = 0.3
+"""Length of the tracked heading drawn by viewers (`tracked_points`), metres."""
 NEAR_BALL_M = 1.0
 """The ball this close to the learner (metres, in the ground plane) is near: the estimate's `ball_near` error
 counts those steps only, where kicking needs the estimate most."""
@@ -76,6 +81,9 @@ class LearnerView(MjxEnv):
         if game.config.vision_gaze and not self.estimates_world:
             raise ValueError("vision_gaze turns the head toward the player's own estimate of the ball: it needs a "
                              "vision player that estimates the game (a walker with the placo prior: command_prior=placo)")
+        if game.config.vision_tracker and not self.estimates_world:
+            raise ValueError("vision_tracker replaces parts of a vision player's estimate of the game by what it "
+                             "tracks: it needs a player that estimates the game (command_prior=placo)")
         if game.camera is not None:  # the learner's observations need its own camera only
             game.camera = game.camera.select([LEARNER])
         self.game, self.net, self.walker, self.teacher_prior = game, net, walker, teacher_prior
@@ -90,6 +98,12 @@ class LearnerView(MjxEnv):
             raise ValueError(f"estimate_oracle replaces parts of a game-estimating vision player's estimate "
                              f"(command_prior=placo) by the truth; parts are {', '.join(self._world_parts)}"
                              + (f" (unknown: {', '.join(unknown)})" if unknown else ""))
+        team = int(game.layout.team[LEARNER])
+        goals = np.asarray(game._goals[:, :2], np.float32)[[team, 1 - team]]  # own, opponent
+        self._goal_xy = goals
+        """World x, y of the learner's own and the opponent goal's mouths [2, 2] (the tracker's pitch)."""
+        self._net_xy = goals + np.stack([np.sign(goals[:, 0]) * game.config.scene.goal_depth, np.zeros(2)], -1)
+        """... and of the centres of their back nets (what the camera sights)."""
         self.tables = load_tables()
         """The placo player's walk and kick (legged.soccer.placo_player)."""
         self._camera = None
@@ -127,6 +141,9 @@ class LearnerView(MjxEnv):
         if self.estimates_world:  # running sums of its estimate's squared errors, and of their steps
             zeros = jnp.zeros(len(self.estimate_parts) + 1)  # the parts, then the ball when near
             game = game.replace(info=dict(game.info, estimate_sq=zeros, estimate_steps=zeros))
+        if self.config.vision_tracker:  # near its kick-off spot, turned anyhow: the yaw is unknown until it sees
+            start = tracker_start(self.game._kickoff[LEARNER])
+            game = game.replace(info=dict(game.info, tracker=self._sight(start, game.info)))
         return self._view(game)
 
     def prepare(self, state: State, action: jax.Array, opponent: Opponent | None = None,
@@ -189,6 +206,10 @@ class LearnerView(MjxEnv):
         estimate among its `action`, with the ball where the camera sees it under `vision_sighted_ball` and the
         parts named in `estimate_oracle` true."""
         world = action[COMMAND_SIZE:]
+        if self.config.vision_tracker:
+            parts = self._world_parts
+            world = tracked_features(state.info["tracker"], world, parts["ball"], parts["own_goal"],
+                                     parts["opponent_goal"], self._goal_xy[0], self._goal_xy[1])
         if self.config.vision_sighted_ball:
             sighting = self._sightings(state)[0]  # the ball's: seen, then x, y, z
             ball = self.estimate_parts["ball"]
@@ -216,10 +237,18 @@ class LearnerView(MjxEnv):
         points = jnp.concatenate([xy, height + sight[:, 3:]], -1)
         return jnp.where(sight[:, :1] > 0, points, jnp.nan)
 
+    def tracked_points(self, state: State) -> jax.Array:
+        """World positions [2, 3] of where the learner's tracker (`vision_tracker`) puts its torso and of a point
+        TRACKED_ARROW_M ahead of it along the tracked heading, at the torso's height; NaN before it locks on."""
+        pose, locked = tracked_pose(state.info["tracker"])
+        ahead = pose[:2] + TRACKED_ARROW_M * jnp.stack([jnp.cos(pose[2]), jnp.sin(pose[2])])
+        height = self._in_world(state, jnp.zeros((1, 2)))[1]
+        points = jnp.concatenate([jnp.stack([pose[:2], ahead]), jnp.full((2, 1), height)], -1)
+        return jnp.where(locked, points, jnp.nan)
+
     def _sightings(self, state: State) -> jax.Array:
-        """The learner's sightings (`vision_sightings`, the end of its state), [len(SIGHTED), SIGHTING_SIZE]."""
-        first = -len(SIGHTED) * SIGHTING_SIZE
-        return state.info["game_obs"]["state"][LEARNER, first:].reshape(len(SIGHTED), SIGHTING_SIZE)
+        """The learner's sightings (`vision_sightings` or `vision_tracker`), [len(SIGHTED), SIGHTING_SIZE]."""
+        return state.info["sightings"][LEARNER].reshape(len(SIGHTED), SIGHTING_SIZE)
 
     def _in_world(self, state: State, ego: jax.Array) -> tuple[jax.Array, jax.Array]:
         """(world x, y [k, 2] of points `ego` [k, 2] in the learner's heading frame, the learner's torso height)."""
@@ -251,7 +280,27 @@ class LearnerView(MjxEnv):
             info.update(estimate_sq=info["estimate_sq"] + sq, estimate_steps=info["estimate_steps"] + steps)
         game_obs = info.pop("game_obs")
         game = State(view, game_obs, jnp.zeros(self.game.n_agents), state.done, {}, info)
-        return self._view(self.game.transition(game, view, actions))
+        game = self.game.transition(game, view, actions)
+        if self.config.vision_tracker:
+            game = game.replace(info=dict(game.info, tracker=self._tracked(state, game, walker_state)))
+        return self._view(game)
+
+    def _tracked(self, state: State, game: State, walker_state: jax.Array) -> jax.Array:
+        """The learner's tracker one control period on (`vision_tracker`): moved by its walking command and gyro
+        over the period, back on its kick-off spot after a goal, corrected by what its camera now sights."""
+        proprio = state.info["game_obs"]["state"][LEARNER, :PROPRIO_SIZE]
+        up = -proprio[:3] / jnp.maximum(jnp.linalg.norm(proprio[:3]), 1e-6)  # gravity in the torso frame leads
+        mine = walker_state[LEARNER]
+        tracker = tracker_step(state.info["tracker"], mine[1:3], jnp.dot(proprio[3:6], up), getting_up(mine),
+                               self.game.dt)
+        kickoff = jnp.any(game.info["score"] != state.info["score"])
+        tracker = jnp.where(kickoff, tracker_kickoff(self.game._kickoff[LEARNER]), tracker)
+        return self._sight(tracker, game.info)
+
+    def _sight(self, tracker: jax.Array, info: dict) -> jax.Array:
+        """The learner's tracker corrected by its camera's sightings in the game's `info`."""
+        sightings = info["sightings"][LEARNER].reshape(len(SIGHTED), SIGHTING_SIZE)
+        return tracker_sight(tracker, sightings, self._net_xy, self.config.scene.goal_width)
 
     def observation_layout(self) -> dict:
         return self.game.observation_layout()

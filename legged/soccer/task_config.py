@@ -75,6 +75,11 @@ class SoccerConfig(EnvConfig):
     """With `vision`: 'state' also ends with where the head camera's image shows the ball, the own goal's net and
     the opponent goal's net (a colour-and-depth detector, legged.soccer.sightings: for each seen, then x, y, z in
     the heading frame; zeros when not in view)."""
+    vision_tracker: bool = False
+    """With `vision`, for a player that estimates the game (command_prior=placo): its placo command reads the goals
+    and the ball from a tracker (legged.soccer.tracker: its pose on the pitch by odometry and the goal nets its
+    camera sights, the ball where it last saw it) wherever the tracker knows them, from its own estimate
+    elsewhere. The state is unchanged."""
     vision_sighted_ball: bool = False
     """With `vision_sightings`, for a player that estimates the game (command_prior=placo): the placo command
     takes the ball's position from the sighting whenever the camera sees the ball, from the player's own
@@ -105,6 +110,8 @@ class SoccerConfig(EnvConfig):
         if self.vision_sightings and not self.vision:
             raise ValueError("vision_sightings adds where the head camera sees the ball and the goals to a vision "
                              "player's state: it needs vision")
+        if self.vision_tracker and not self.vision:
+            raise ValueError("vision_tracker tracks a vision player's pose and the ball from its camera: it needs vision")
         if self.vision_sighted_ball and not self.vision_sightings:
             raise ValueError("vision_sighted_ball steers by the ball the camera sees: it needs vision_sightings")
         if self.vision_heading and not self.vision:

@@ -1,0 +1,156 @@
+"""A vision player's tracker of its own place on the pitch and of the ball: odometry, goal nets and ball sightings.
+
+A RoboCup player keeps its pose on the pitch by dead reckoning (the gyro's yaw rate, the walking command's
+velocity) corrected by the landmarks it sees, and keeps the ball where it last saw it; it knows the pitch (where
+the goals stand), its kick-off spot and when play restarts from the kick-off (the referee's whistle). This is
+that tracker, an extended Kalman filter over the torso's ground pose (x, y, yaw) in the world:
+
+- predict, every control period: yaw advances by the gyro's rate about the vertical, x and y by the walker's
+  filtered velocity command (measured over 5 s: 0.15 m of drift with the true yaw, 0.03 rad of yaw);
+- correct with each goal net the camera sights (legged.soccer.sightings: the mean of the net's visible points,
+  in the heading frame), modelled as the centre of the goal's back net: well placed along the pitch, up to half
+  the goal's width off across it; a sighting too far from the prediction (a false one) is ignored;
+- lock on: a game starts with the robot near its kick-off spot but turned anyhow (+-90 degrees), so the yaw is
+  unknown until the opponent goal's net is first seen; its bearing then sets the yaw;
+- a kick-off after a goal puts the robot back on its kick-off spot and the ball on the centre spot: both known;
+- the ball: where the camera last saw it (world frame), forgotten after BALL_MEMORY_S unseen.
+
+The state is one float vector (`TRACKER_SIZE`) per player, jittable and vmappable. `tracked_features` turns it
+into the heading-frame features the placo command reads (legged.soccer.observe.game_features: ball, own goal,
+opponent goal), leaving the player's own estimate where the tracker knows nothing (before it locks on, a ball
+not seen lately).
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+from legged.envs.math import yaw_rotate
+
+TRACKER_SIZE = 17
+"""x, y, yaw (3), the pose's covariance (9), locked on (1), the ball's world x, y (2), ball known (1), seconds
+since the ball was last seen (1)."""
+
+START_STD = (0.29, 0.29, 0.9)
+"""Standard deviation of the pose at a game's start around the kick-off pose (m, m, rad): the spawn's uniform
++-0.5 m and +-90 degrees."""
+
+LOCK_YAW_STD = 0.15
+"""Standard deviation of the yaw set by the first sighting of the opponent goal's net (rad): the position's
+uncertainty and the net's width seen from about 3.5 m."""
+
+DRIFT_STD_PER_S = (0.19, 0.19, 0.063)
+"""Growth of the pose's standard deviation per square root of a second while walking (m, m, rad), from the
+odometry's measured drift."""
+
+GETTING_UP_DRIFT = 10.0
+"""The drift is this many times larger while the robot falls or gets up (its walking command says nothing then)."""
+
+NET_ALONG_STD = 0.06
+"""Standard deviation of a net sighting along the pitch (m): the net's back stands at the goal's depth."""
+
+NET_ACROSS_FRACTION = 0.275
+"""Standard deviation of a net sighting across the pitch as a fraction of the goal's width (the camera may see
+only a part of the net)."""
+
+GATE = 25.0
+"""A sighting whose squared Mahalanobis distance from the prediction exceeds this is ignored (once locked on)."""
+
+BALL_MEMORY_S = 1.0
+"""The ball is kept where it was last seen this long (seconds); after that the player's own estimate is used."""
+
+
+def tracker_start(kickoff) -> jnp.ndarray:
+    """A tracker at a game's start: at the kick-off pose `kickoff` (x, y, yaw), its yaw not yet known."""
+    cov = jnp.diag(jnp.square(jnp.asarray(START_STD, jnp.float32)))
+    return _pack(jnp.asarray(kickoff, jnp.float32), cov, 0.0, jnp.zeros(2), 0.0, 0.0)
+
+
+def tracker_kickoff(kickoff) -> jnp.ndarray:
+    """A tracker after a kick-off restart: on its kick-off pose, known, the ball on the centre spot."""
+    return _pack(jnp.asarray(kickoff, jnp.float32), jnp.eye(3) * 1e-4, 1.0, jnp.zeros(2), 1.0, 0.0)
+
+
+def tracker_step(tracker, velocity, yaw_rate, getting_up, dt: float) -> jnp.ndarray:
+    """Predict one control period on: `velocity` (vx, vy) the walker's command in the heading frame (m/s),
+    `yaw_rate` (rad/s) the gyro's rate about the vertical."""
+    pose, cov, locked, ball, known, age = _unpack(tracker)
+    yaw = pose[2]
+    move = yaw_rotate(-yaw, velocity) * dt
+    jacobian = jnp.eye(3).at[:2, 2].set(yaw_rotate(-yaw, jnp.stack([-velocity[1], velocity[0]])) * dt)
+    drift = jnp.square(jnp.asarray(DRIFT_STD_PER_S)) * dt * jnp.where(getting_up, GETTING_UP_DRIFT ** 2, 1.0)
+    cov = jacobian @ cov @ jacobian.T + jnp.diag(drift)
+    pose = pose + jnp.concatenate([move, yaw_rate[None] * dt])
+    return _pack(pose, cov, locked, ball, known, age + dt)
+
+
+def tracker_sight(tracker, sightings, net_centres, goal_width: float) -> jnp.ndarray:
+    """Correct with one control period's `sightings` [3, 4] (ball, own goal's net, opponent goal's net: seen, x,
+    y, z in the heading frame; legged.soccer.sightings) and the world x, y [2, 2] of the own and opponent goal's
+    back-net centres."""
+    pose, cov, locked, ball, known, age = _unpack(tracker)
+    net_centres = jnp.asarray(net_centres, jnp.float32)
+    opponent = sightings[2]
+    lock = (locked < 0.5) & (opponent[0] > 0.5)
+    to_net = net_centres[1] - pose[:2]
+    lock_yaw = jnp.arctan2(to_net[1], to_net[0]) - jnp.arctan2(opponent[2], opponent[1])
+    locked_cov = cov.at[2, :].set(0.0).at[:, 2].set(0.0).at[2, 2].set(LOCK_YAW_STD ** 2)
+    pose = jnp.where(lock, pose.at[2].set(lock_yaw), pose)
+    cov = jnp.where(lock, locked_cov, cov)
+    locked = jnp.where(lock, 1.0, locked)
+    known = jnp.where(lock, 0.0, known)  # a ball placed before the yaw was known is misplaced
+    across = (NET_ACROSS_FRACTION * goal_width) ** 2
+    for k in (1, 2):
+        pose, cov = _net_update(pose, cov, sightings[k], net_centres[k - 1], locked > 0.5, across)
+    seen = sightings[0, 0] > 0.5
+    ball = jnp.where(seen, pose[:2] + yaw_rotate(-pose[2], sightings[0, 1:3]), ball)
+    return _pack(pose, cov, locked, ball, jnp.where(seen, 1.0, known), jnp.where(seen, 0.0, age))
+
+
+def tracked_features(tracker, estimate, ball: slice, own_goal: slice, opponent_goal: slice, own_xy,
+                     opponent_xy) -> jnp.ndarray:
+    """The game features `estimate` (a player's own estimate, heading frame) with what the tracker knows put in:
+    both goals' centres (`own_xy`, `opponent_xy`, world) once locked on, the ball's x, y if seen within
+    BALL_MEMORY_S."""
+    pose, _, locked, ball_xy, known, age = _unpack(tracker)
+    ego = lambda xy: yaw_rotate(pose[2], jnp.asarray(xy, jnp.float32) - pose[:2])
+    on = locked > 0.5
+    estimate = estimate.at[own_goal].set(jnp.where(on, ego(own_xy), estimate[own_goal]))
+    estimate = estimate.at[opponent_goal].set(jnp.where(on, ego(opponent_xy), estimate[opponent_goal]))
+    fresh = on & (known > 0.5) & (age <= BALL_MEMORY_S)
+    xy = slice(ball.start, ball.start + 2)
+    return estimate.at[xy].set(jnp.where(fresh, ego(ball_xy), estimate[xy]))
+
+
+def tracked_pose(tracker) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """(the tracked pose x, y, yaw, whether the tracker is locked on)."""
+    pose, _, locked, *_ = _unpack(tracker)
+    return pose, locked > 0.5
+
+
+def _net_update(pose, cov, sight, centre, locked, across: float):
+    """One extended-Kalman correction of (pose, cov) by a net sighting [4] of the back net centred at `centre`."""
+    rel = centre - pose[:2]
+    predicted = yaw_rotate(pose[2], rel)
+    c, s = jnp.cos(pose[2]), jnp.sin(pose[2])
+    world_to_ego = jnp.array([[c, s], [-s, c]])
+    d_yaw = jnp.array([[-s, c], [-c, -s]]) @ rel
+    h = jnp.concatenate([-world_to_ego, d_yaw[:, None]], axis=1)
+    noise = world_to_ego @ jnp.diag(jnp.array([NET_ALONG_STD ** 2, across])) @ world_to_ego.T
+    innovation_cov = h @ cov @ h.T + noise
+    residual = sight[1:3] - predicted
+    distance = residual @ jnp.linalg.solve(innovation_cov, residual)
+    gain = cov @ h.T @ jnp.linalg.inv(innovation_cov)
+    use = locked & (sight[0] > 0.5) & (distance < GATE)
+    return (jnp.where(use, pose + gain @ residual, pose),
+            jnp.where(use, (jnp.eye(3) - gain @ h) @ cov, cov))
+
+
+def _pack(pose, cov, locked, ball, known, age) -> jnp.ndarray:
+    scalars = jnp.stack([jnp.asarray(locked, jnp.float32)])
+    return jnp.concatenate([pose, cov.reshape(9), scalars, ball, jnp.stack([jnp.asarray(known, jnp.float32),
+                                                                           jnp.asarray(age, jnp.float32)])])
+
+
+def _unpack(tracker):
+    return tracker[:3], tracker[3:12].reshape(3, 3), tracker[12], tracker[13:15], tracker[15], tracker[16]
