@@ -253,7 +253,7 @@ def load_student_whole(student: torch.nn.Module, run_path: Path) -> None:
 
 
 def _grown_state(source: dict, mine: dict, image_features: int) -> dict:
-    """`source` widened to a student whose state has `grown` more entries at its end: the normaliser keeps the
+    """`source` widened to a student (`mine`) whose state has more entries at its end: the normaliser keeps the
     new entries' fresh statistics (its sample count capped), and every weight matrix that reads the state
     (the inputs [..., state, image features]) gets zero columns for them. Unchanged when nothing grew."""
     key = "obs_normalizer._mean"

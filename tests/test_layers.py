@@ -9,7 +9,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-APP = ("legged.cli", "legged.cli_nav", "legged.cli_runs", "legged.cli_soccer", "legged.demo")
+APP = ("legged.cli", "legged.cli_bench", "legged.cli_nav", "legged.cli_runs", "legged.cli_soccer", "legged.demo")
 """The command line and the demo: the top layer, free to import everything."""
 LAYERS = {
     "core": ("legged",),

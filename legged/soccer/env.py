@@ -30,7 +30,7 @@ from legged.robots.op3 import OP3
 from legged.robots.spec import RobotSpec
 from legged.sensors.raycam import render
 from legged.soccer import observe, randomize, rules
-from legged.soccer.sightings import (BALL_MIN_SHADE, NET_MIN_SHADE, SIGHTED, SIGHTING_SIZE, camera_agents,
+from legged.soccer.sightings import (BALL_MIN_SHADE, NET_MIN_SHADE, SIGHTED, SIGHTING_SIZE, camera_agents, pixel_points,
                                      sighting)
 from legged.soccer.layout import SoccerLayout
 from legged.soccer.pitch import goal_centres, kickoff_poses
@@ -230,9 +230,9 @@ class SoccerEnv(MjxEnv):
         agents = camera_agents(cams, self.layout.head_camera)
         team = self.layout.team[agents]
         nets = np.array([c.scene.team_net_rgba(t)[:3] for t in (0, 1)], np.float32)
-        see = lambda *object_: sighting(images["rgb"], images["depth"], self.camera.dirs, data.cam_xpos[cams],
-                                        data.cam_xmat[cams].reshape(-1, 3, 3), b.pos[agents], b.yaw[agents],
-                                        *object_, c.camera.max_depth)
+        points, in_range = pixel_points(images["depth"], self.camera.dirs, c.camera.max_depth)
+        see = lambda *object_: sighting(images["rgb"], points, in_range, data.cam_xpos[cams],
+                                        data.cam_xmat[cams].reshape(-1, 3, 3), b.pos[agents], b.yaw[agents], *object_)
         sight = jnp.concatenate([see(c.scene.ball_rgba[:3], BALL_MIN_SHADE, 2.0 / 3.0 * c.scene.ball_radius),
                                  see(nets[team], NET_MIN_SHADE, 0.0), see(nets[1 - team], NET_MIN_SHADE, 0.0)], -1)
         return jnp.zeros((self.n_agents, len(SIGHTED) * SIGHTING_SIZE), jnp.float32).at[agents].set(sight)

@@ -48,19 +48,24 @@ def colour_mask(rgb, colour, min_shade: float) -> jnp.ndarray:
     return (shade >= min_shade) & (off <= COLOUR_TOLERANCE)
 
 
-def sighting(rgb, depth, dirs, cam_pos, cam_rot, torso_pos, torso_yaw, colour, min_shade: float, behind: float,
-             max_depth: float) -> jnp.ndarray:
-    """[n, SIGHTING_SIZE] for n cameras: rgb [n, H, W, 3] uint8, depth [n, H, W] (z-depth, metres), dirs the
-    pixels' unit rays in the camera frame [n, H * W, 3] (RayCamera.dirs), cam_pos [n, 3] and cam_rot [n, 3, 3]
-    (world from camera), torso_pos [n, 3] and torso_yaw [n] of each camera's robot; the object's `colour` ([3] or
-    [n, 3]), the darkest shade of it counted (`colour_mask`), and how far its centre lies behind the mean of its
-    visible points along the line of sight (`behind`, metres: 2/3 of a ball's radius). Jittable."""
-    n = rgb.shape[0]
-    rgb = rgb.reshape(n, -1, 3)
-    depth = depth.reshape(n, -1)
+def pixel_points(depth, dirs, max_depth: float) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """(every pixel's point in its camera's frame [n, P, 3], whether it lies within `max_depth` [n, P]) from z-depth
+    [n, H, W] (metres) and the pixels' unit rays in the camera frame [n, H * W, 3] (RayCamera.dirs): computed once
+    per image for every object `sighting` looks for. Jittable."""
+    depth = depth.reshape(depth.shape[0], -1)
     dirs = jnp.asarray(dirs)
-    mask = colour_mask(rgb, colour, min_shade) & (depth < max_depth)
-    points = dirs * (depth / -dirs[..., 2])[..., None]  # camera frame, [n, P, 3]
+    return dirs * (depth / -dirs[..., 2])[..., None], depth < max_depth
+
+
+def sighting(rgb, points, in_range, cam_pos, cam_rot, torso_pos, torso_yaw, colour, min_shade: float,
+             behind: float) -> jnp.ndarray:
+    """[n, SIGHTING_SIZE] for n cameras: rgb [n, H, W, 3] uint8, the pixels' points and depth range (`pixel_points`),
+    cam_pos [n, 3] and cam_rot [n, 3, 3] (world from camera), torso_pos [n, 3] and torso_yaw [n] of each camera's
+    robot; the object's `colour` ([3] or [n, 3]), the darkest shade of it counted (`colour_mask`), and how far its
+    centre lies behind the mean of its visible points along the line of sight (`behind`, metres: 2/3 of a ball's
+    radius). Jittable."""
+    n = rgb.shape[0]
+    mask = colour_mask(rgb.reshape(n, -1, 3), colour, min_shade) & in_range
     count = jnp.sum(mask, -1)
     seen = count > 0
     surface = jnp.sum(points * mask[..., None], 1) / jnp.maximum(count, 1)[:, None]

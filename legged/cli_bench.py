@@ -1,0 +1,128 @@
+"""The command line's benchmarks: `legged bench env|soak|soccer|encoder` (and `bench plan`, from cli_nav)."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from legged.cli_args import SEED, THREADS, bounded, choices, ints, task_names
+from legged.cli_nav import _print_records, add_bench_plan
+
+
+def cmd_bench(args) -> int:
+    from legged.bench import attach_peer, bench_env, bench_peer, print_table
+    from legged.tasks import default_config
+
+    default_config(args.task)  # unknown task -> clear error before any compilation
+    progress = None if args.quiet else (lambda msg: print(f"[bench] {msg}", file=sys.stderr, flush=True))
+    records = bench_env(args.task, args.batch, args.seconds, physics=args.physics, threads=args.threads or None,
+                        progress=progress)
+    if args.peer_python:
+        if progress:
+            progress("running the Playground peer in the same run")
+        attach_peer(records, bench_peer(args.peer_python, args.peer_script, args.batch, args.seconds))
+    return _print_records(records, args.json, print_table)
+
+
+def cmd_bench_soak(args) -> int:
+    from legged.bench import soak
+
+    progress = None if args.quiet else (lambda msg: print(f"[soak] {msg}", file=sys.stderr, flush=True))
+    records = [soak(task, args.steps, args.batch, args.seed, args.physics, args.threads or None, progress)
+               for task in args.tasks]
+    if args.json:
+        print(json.dumps(records))
+    else:
+        for r in records:
+            print(f"{r['task']:20s} {r['env_steps']:>10,} steps  non-finite values {r['non_finite_values']}  "
+                  f"episodes {r['episodes']}  diverged {r['diverged_episodes']}  {r['env_steps_per_s']:.0f} steps/s")
+    return 0
+
+
+def cmd_bench_encoder(args) -> int:
+    import torch
+
+    from policies.bench_encoder import bench_encoders
+
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    records = bench_encoders(args.steps, args.batch)
+    if args.json:
+        print(json.dumps(records, indent=1))
+    else:
+        for r in records:
+            print(f"H={r['history_steps']:4d}  encoder {r['encoder_s']:.3f} s  conv1d {r['conv1d_s']:.3f} s "
+                  f"({r['conv1d_over_unfold']:.2f}x)  head {r['head_s']:.3f} s  encoder/head {r['encoder_over_head']:.1f}x")
+    return 0
+
+
+def cmd_bench_soccer(args) -> int:
+    from legged.soccer.bench import bench_soccer, print_soccer_table
+
+    if not set(args.team_sizes) <= {1, 2}:
+        raise ValueError(f"--team-sizes takes 1 and/or 2 (1v1, 2v2), got {args.team_sizes}")
+    cameras = {"off": (False,), "on": (True,), "both": (False, True)}[args.camera]
+    progress = None if args.quiet else (lambda msg: print(f"[bench] {msg}", file=sys.stderr, flush=True))
+    records = bench_soccer(args.team_sizes, cameras, args.batch, args.seconds, peer=not args.no_peer,
+                           peer_steps=args.peer_steps, physics=args.physics, threads=args.threads or None,
+                           progress=progress, casters=args.caster)
+    return _print_records(records, args.json, print_soccer_table)
+
+
+def add_bench_commands(sub) -> None:
+    """Register `bench` and its benchmarks."""
+    b = sub.add_parser("bench", help="benchmarks")
+    bsub = b.add_subparsers(dest="what", required=True)
+    add_bench_plan(bsub)
+    be = bsub.add_parser("env", help="environment steps per second on MJX and native MuJoCo, beside bare physics")
+    be.add_argument("--task", default="confined-waypoints")
+    be.add_argument("--batch", type=ints(1, 65536), default=[1, 64, 256], help="comma-separated batch sizes")
+    be.add_argument("--physics", type=choices("mjx", "native", "rollout"), default=["mjx", "native", "rollout"],
+                    help="comma-separated: mjx, native (the task on each engine), rollout (bare native physics)")
+    be.add_argument("--threads", type=THREADS, default=0, metavar="N",
+                    help="threads of native physics (default: every core)")
+    be.add_argument("--seconds", type=bounded(float, 0.0, 3600.0), default=3.0, help="timed seconds per batch size")
+    be.add_argument("--peer-python", default=None,
+                    help="python of the MuJoCo Playground peer (../shared/peers); adds ratio_vs_peer")
+    be.add_argument("--peer-script", default=None,
+                    help="the peer's benchmark script (default: legged/peers/playground.py of this install)")
+    be.add_argument("--json", action="store_true", help="print a JSON list, one object per batch size")
+    be.add_argument("--quiet", action="store_true", help="no progress messages")
+    be.set_defaults(fn=cmd_bench)
+    sk = bsub.add_parser("soak", help="random and extreme actions under randomisation: non-finite values and "
+                                      "divergences that reach the learner")
+    sk.add_argument("--tasks", type=task_names, default=["confined-waypoints", "soccer-1v1"],
+                    help="comma-separated tasks")
+    sk.add_argument("--steps", type=bounded(int, 1, 10**9), default=1_000_000, help="env steps per task")
+    sk.add_argument("--batch", type=bounded(int, 1, 65536), default=256)
+    sk.add_argument("--seed", type=SEED, default=0)
+    sk.add_argument("--physics", choices=["mjx", "native"], default="native")
+    sk.add_argument("--threads", type=THREADS, default=0, metavar="N", help="native physics threads")
+    sk.add_argument("--json", action="store_true")
+    sk.add_argument("--quiet", action="store_true")
+    sk.set_defaults(fn=cmd_bench_soak)
+    bs = bsub.add_parser("soccer", help="soccer env steps per second (1v1, 2v2, with/without cameras) beside "
+                                        "native MuJoCo and dm_control's soccer")
+    bs.add_argument("--team-sizes", type=ints(1), default=[1, 2], help="players per team: 1 and/or 2")
+    bs.add_argument("--camera", choices=("off", "on", "both"), default="both", help="head cameras rendered")
+    bs.add_argument("--batch", type=ints(1, 65536), default=[1, 16, 64], help="comma-separated batch sizes")
+    bs.add_argument("--seconds", type=bounded(float, 0.0, 3600.0), default=3.0, help="timed seconds per measurement")
+    bs.add_argument("--no-peer", action="store_true", help="skip dm_control's soccer")
+    bs.add_argument("--peer-steps", type=bounded(int, 1, 100000), default=20, help="control steps timed per dm_control env")
+    bs.add_argument("--physics", type=choices("mjx", "native"), default=["mjx", "native"],
+                    help="comma-separated physics engines to measure")
+    bs.add_argument("--threads", type=THREADS, default=0, metavar="N",
+                    help="threads of native physics (default: every core)")
+    bs.add_argument("--caster", type=choices("c", "c-unculled", "jax"), default=["c"],
+                    help="comma-separated ray casters of the cameras under native physics: MuJoCo's C one, the "
+                         "same without culling geoms outside each view, JAX's")
+    bs.add_argument("--json", action="store_true", help="print a JSON list, one object per measurement")
+    bs.add_argument("--quiet", action="store_true", help="no progress messages")
+    bs.set_defaults(fn=cmd_bench_soccer)
+    bn = bsub.add_parser("encoder", help="a PPO mini-batch's history encoder: forward + backward seconds beside the "
+                                         "conv1d layout and the actor's head")
+    bn.add_argument("--steps", type=ints(1, 1000), default=[20, 25, 50], help="comma-separated history lengths")
+    bn.add_argument("--batch", type=bounded(int, 1, 10**6), default=6144, help="mini-batch size")
+    bn.add_argument("--threads", type=THREADS, default=0, metavar="N", help="torch threads (default: torch's)")
+    bn.add_argument("--json", action="store_true", help="print a JSON list, one object per history length")
+    bn.set_defaults(fn=cmd_bench_encoder)
