@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
-import json
 import sys
 
 from legged.cli_args import SEED, THREADS, bounded, choices, ints, task_names
 from legged.cli_nav import _print_records, add_bench_plan
+
+
+def _each_line(line):
+    """A benchmark's table that prints `line(record)` for each record (for `_print_records`)."""
+    return lambda records: print("\n".join(line(r) for r in records))
 
 
 def cmd_bench(args) -> int:
@@ -30,13 +34,9 @@ def cmd_bench_soak(args) -> int:
     progress = None if args.quiet else (lambda msg: print(f"[soak] {msg}", file=sys.stderr, flush=True))
     records = [soak(task, args.steps, args.batch, args.seed, args.physics, args.threads or None, progress)
                for task in args.tasks]
-    if args.json:
-        print(json.dumps(records))
-    else:
-        for r in records:
-            print(f"{r['task']:20s} {r['env_steps']:>10,} steps  non-finite values {r['non_finite_values']}  "
-                  f"episodes {r['episodes']}  diverged {r['diverged_episodes']}  {r['env_steps_per_s']:.0f} steps/s")
-    return 0
+    return _print_records(records, args.json, _each_line(
+        lambda r: f"{r['task']:20s} {r['env_steps']:>10,} steps  non-finite values {r['non_finite_values']}  "
+                  f"episodes {r['episodes']}  diverged {r['diverged_episodes']}  {r['env_steps_per_s']:.0f} steps/s"))
 
 
 def cmd_bench_encoder(args) -> int:
@@ -47,13 +47,9 @@ def cmd_bench_encoder(args) -> int:
     if args.threads:
         torch.set_num_threads(args.threads)
     records = bench_encoders(args.steps, args.batch)
-    if args.json:
-        print(json.dumps(records, indent=1))
-    else:
-        for r in records:
-            print(f"H={r['history_steps']:4d}  encoder {r['encoder_s']:.3f} s  conv1d {r['conv1d_s']:.3f} s "
-                  f"({r['conv1d_over_unfold']:.2f}x)  head {r['head_s']:.3f} s  encoder/head {r['encoder_over_head']:.1f}x")
-    return 0
+    return _print_records(records, args.json, _each_line(
+        lambda r: f"H={r['history_steps']:4d}  encoder {r['encoder_s']:.3f} s  conv1d {r['conv1d_s']:.3f} s "
+                  f"({r['conv1d_over_unfold']:.2f}x)  head {r['head_s']:.3f} s  encoder/head {r['encoder_over_head']:.1f}x"))
 
 
 def cmd_bench_soccer(args) -> int:
