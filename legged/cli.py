@@ -67,6 +67,10 @@ def cmd_eval(args) -> int:
                          f"soccer")
     if args.pilot == "teacher" and not config.distill.teacher:
         raise ValueError(f"--pilot teacher: {args.run_dir} was not distilled from a teacher; name a soccer run")
+    if args.compare_teacher and (not soccer or config.drill or not config.distill.teacher):
+        raise ValueError(f"--compare-teacher plays a distilled soccer student's teacher in the same games; "
+                         f"{args.run_dir} is not a soccer student distilled from a teacher (task {config.task}"
+                         f"{', drill ' + config.drill if config.drill else ''})")
     if config.drill and (args.opponent or args.teammate):
         raise ValueError(f"{args.run_dir} trained on the {config.drill} drill, where nobody else plays: its eval "
                          f"plays the drill, without --opponent or --teammate (or use `legged drill {config.drill} "
@@ -91,22 +95,20 @@ def cmd_eval(args) -> int:
             env.steer_with(soccer_opponent(pilot, env))
             report["pilot"] = pilot
         samples = []
-        game = soccer and not config.drill  # a drill: nobody else plays
-        opponent = (soccer_opponent(args.opponent or "scripted", env),) if game else ()
         if config.drill:
             report["drill"] = config.drill
         elif soccer:
             report["opponent"] = args.opponent or "scripted"
-        if soccer and env.game.layout.players_per_team > 1:
-            opponent += (soccer_opponent(args.teammate or "self", env, policy),)
-            report["teammate"] = args.teammate or "self"
-        elif args.teammate:
-            raise ValueError(f"--teammate applies to 2v2 tasks; {config.task} has one player per team")
+            if env.game.layout.players_per_team > 1:
+                report["teammate"] = args.teammate or "self"
+        others = _other_players(args, env, policy) if soccer and not config.drill else ()  # a drill: nobody else
         finals = evaluate(env, policy, args.episodes, args.seed, args.physics, args.num_envs or 16,
-                          args.threads or None, progress=not args.quiet, probe=samples, env_args=opponent)
+                          args.threads or None, progress=not args.quiet, probe=samples, env_args=others)
         report = dict(summarize(finals, False), **report)
         if samples and hasattr(env, "observation_layout"):
             report["latent_probe_r2"] = latent_probe(samples, env.observation_layout())
+        if args.compare_teacher:
+            report.update(_teacher_in_the_same_games(args, config.distill.teacher, finals))
     else:  # a fixed set of held-out worlds per difficulty, one episode each, every episode to its end
         report["world_seed"] = args.world_seed if args.world_seed is not None else \
             config.env.world_seed + HELD_OUT_SEED_OFFSET
@@ -121,6 +123,39 @@ def cmd_eval(args) -> int:
             report["difficulties"][str(level)] = summarize(finals, True)
     print(json.dumps(report) if args.json else json.dumps(report, indent=2))
     return 0
+
+
+def _other_players(args, env, policy) -> tuple:
+    """The soccer players `legged eval` plays `policy` with in `env`: the opponent, and in 2v2 its teammate."""
+    from policies.evaluate import soccer_opponent
+
+    others = (soccer_opponent(args.opponent or "scripted", env),)
+    if env.game.layout.players_per_team > 1:
+        return others + (soccer_opponent(args.teammate or "self", env, policy),)
+    if args.teammate:
+        raise ValueError("--teammate applies to 2v2 tasks; this one has one player per team")
+    return others
+
+
+def _teacher_in_the_same_games(args, teacher_run: str, finals: list[dict]) -> dict:
+    """`legged eval --compare-teacher`: the student's distillation teacher played in the games the student
+    played (the same seed and batches start the same games), and the student's goals over the teacher's."""
+    import dataclasses
+
+    from policies.evaluate import evaluate, held_out, paired_goal_ratio, summarize
+    from policies.policy_io import load_policy
+    from policies.training import build_env
+
+    teacher, config = load_policy(teacher_run)
+    env = build_env(dataclasses.replace(config, env=held_out(config.task, config.env)))
+    teacher_finals = evaluate(env, teacher, args.episodes, args.seed, args.physics, args.num_envs or 16,
+                              args.threads or None, progress=not args.quiet,
+                              env_args=_other_players(args, env, teacher))
+    summary = summarize(teacher_finals, False)
+    keep = ("goals_for_per_episode", "goals_against_per_episode", "win_rate", "fall_rate")
+    return {"teacher": dict({k: summary[k] for k in keep}, run=teacher_run, checkpoint=str(teacher.checkpoint)),
+            "goals_vs_teacher": paired_goal_ratio([f["goals_for"] for f in finals],
+                                                  [f["goals_for"] for f in teacher_finals])}
 
 
 def cmd_plot(args) -> int:
@@ -296,6 +331,9 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--tracker", action="store_true",
                     help="a vision player that estimates the game steers by its tracker's goals and ball where it "
                          "knows them (env.vision_tracker, legged.soccer.tracker)")
+    ev.add_argument("--compare-teacher", action="store_true",
+                    help="a distilled soccer student: also play its teacher in the same games and report the "
+                         "student's goals over the teacher's, with a 95%% bootstrap interval over the games")
     ev.add_argument("--json", action="store_true", help="one-line JSON")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
     ev.set_defaults(fn=cmd_eval)

@@ -54,6 +54,10 @@ def check_player(spec: str, drill: DrillConfig) -> None:
     if task_entry(config.task).kind != "soccer" or config.env.scene.players_per_team != 1:
         raise ValueError(f"--player {spec}: a drill player is placo, a skill run ({', '.join(SKILL_DRILLS)}) or a "
                          f"run of soccer-1v1 or soccer-1v1-vision, not {config.task}")
+    if config.env.vision_tracker_inputs:
+        raise ValueError(f"--player {spec} reads what its tracker knows (env.vision_tracker_inputs); drills play "
+                         f"without the tracker (a drill does not start the player on its kick-off spot): measure it "
+                         f"in games (`legged eval {spec} --opponent placo`)")
     if drill.name in ("walk", "getup"):
         raise ValueError(f"--player {spec}: the {drill.name} drill needs placo or an "
                          f"{next(t for t, d in SKILL_DRILLS.items() if d == drill.name)} run; {config.task} "

@@ -85,6 +85,26 @@ def summarize(finals: list[dict], confined: bool) -> dict:
     return out
 
 
+def paired_goal_ratio(goals, baseline_goals, resamples: int = 2000, seed: int = 0) -> dict:
+    """A player's goals over a baseline's in the same games (`goals[i]` and `baseline_goals[i]`: game i, started
+    alike): the ratio of their sums, with a 95% bootstrap interval that resamples whole games, both players'
+    together (deterministic for a `seed`); the ratio and interval are None when the baseline scored nothing."""
+    goals, baseline_goals = np.asarray(goals, float), np.asarray(baseline_goals, float)
+    if goals.shape != baseline_goals.shape or goals.ndim != 1 or len(goals) == 0:
+        raise ValueError(f"paired goals need one count per game for both players: got {goals.shape} and "
+                         f"{baseline_goals.shape}")
+    out = {"games": len(goals), "goals": int(goals.sum()), "baseline_goals": int(baseline_goals.sum()),
+           "ratio": None, "ratio_ci95": None}
+    if baseline_goals.sum() == 0:
+        return out
+    games = np.random.default_rng(seed).integers(0, len(goals), (resamples, len(goals)))
+    mine, theirs = goals[games].sum(1), baseline_goals[games].sum(1)
+    ratios = mine[theirs > 0] / theirs[theirs > 0]
+    out["ratio"] = round(float(goals.sum() / baseline_goals.sum()), 4)
+    out["ratio_ci95"] = [round(float(q), 4) for q in np.percentile(ratios, [2.5, 97.5])]
+    return out
+
+
 def wilson_interval(successes: int, trials: int, z: float = 1.96) -> list[float]:
     """95% Wilson score interval of a success rate (sound at 0 and at 100%, unlike the normal one)."""
     if trials == 0:

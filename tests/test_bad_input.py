@@ -131,6 +131,7 @@ CASES = {
     "eval: pilot of a flat task": (["eval", "{d}/run", "--pilot", "teacher"], "apply to soccer vision students"),
     "eval: oracle of a flat task": (["eval", "{d}/run", "--oracle", "ball"], "apply to soccer vision students"),
     "eval: tracker of a flat task": (["eval", "{d}/run", "--tracker"], "apply to soccer vision students"),
+    "eval: teacher of a flat task": (["eval", "{d}/run", "--compare-teacher"], "not a soccer student distilled"),
     "view: too many envs": (["view", "--num-envs", "64"], "between 1 and 16"),
     "view: missing trajectory": (["view", "--trajectory", "{d}/none.npz", "--port", "0"], "not found"),
     "view: empty trajectory": (["view", "--trajectory", "{d}/empty", "--port", "0"], "{d}/empty"),

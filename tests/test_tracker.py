@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from legged.envs.math import yaw_rotate
-from legged.soccer.tracker import (BALL_MEMORY_S, TRACKER_SIZE, tracked_features, tracked_pose, tracker_kickoff,
-                                   tracker_sight, tracker_start, tracker_step)
+from legged.soccer.tracker import (BALL_MEMORY_S, TRACKER_INPUT_SIZE, TRACKER_SIZE, tracked_features, tracked_pose,
+                                   tracker_inputs, tracker_kickoff, tracker_sight, tracker_start, tracker_step)
 
 OWN_XY, OPPONENT_XY = np.array([-2.5, 0.0]), np.array([2.5, 0.0])
 NETS = np.array([[-2.8, 0.0], [2.8, 0.0]], np.float32)
@@ -109,6 +109,21 @@ def test_its_features_are_the_games_for_its_pose_and_the_ball_is_kept_then_forgo
     np.testing.assert_array_equal(features(tracker)[:2], np.asarray(estimate[:2]))  # ... then forgotten
 
 
+def test_its_inputs_are_what_it_knows_and_zeros_elsewhere():
+    truth = np.array([-0.8, 0.3, -0.5])
+    inputs = lambda t: np.asarray(tracker_inputs(t, OWN_XY, OPPONENT_XY))
+    ego = lambda xy: np.asarray(yaw_rotate(jnp.float32(truth[2]), jnp.asarray(xy - truth[:2], jnp.float32)))
+    start = tracker_start(jnp.asarray(truth, jnp.float32))
+    assert inputs(start).shape == (TRACKER_INPUT_SIZE,)
+    np.testing.assert_array_equal(inputs(sight(start, seen_from(truth, ball=np.array([0.5, 0.0])))), 0.0)  # not locked
+    known = tracker_kickoff(jnp.asarray(truth, jnp.float32))  # on its spot, the ball on the centre spot
+    np.testing.assert_allclose(inputs(known), [1.0, *ego(OWN_XY), *ego(OPPONENT_XY), 1.0, *ego(np.zeros(2))],
+                               atol=1e-5)
+    for _ in range(int(BALL_MEMORY_S / 0.025) + 1):  # the ball unseen for longer than it is kept
+        known = tracker_step(known, jnp.zeros(2), jnp.float32(0.0), jnp.bool_(False), 0.025)
+    np.testing.assert_allclose(inputs(known), [1.0, *ego(OWN_XY), *ego(OPPONENT_XY), 0.0, 0.0, 0.0], atol=1e-4)
+
+
 def test_in_a_game_it_tracks_the_players_pose_on_the_pitch():
     """A vision player (the shipped walker, the placo command from its estimate) in two 1v1 games of native
     physics: once locked on, the tracked pose agrees with MuJoCo's, and the goals it steers by are the true ones."""
@@ -123,7 +138,7 @@ def test_in_a_game_it_tracks_the_players_pose_on_the_pitch():
     from policies.policy_io import load_walker
 
     config = make("soccer-1v1-vision").config  # the students' lens (70 degrees): it sees the goals more often
-    config = dataclasses.replace(config, vision_tracker=True,
+    config = dataclasses.replace(config, vision_tracker=True, vision_tracker_inputs=True,
                                  scene=dataclasses.replace(config.scene, head_camera_fovy_deg=70.0))
     view = LearnerView(make("soccer-1v1-vision", config),
                        walker=load_walker("assets/policies/op3-walker", prior="placo"))
@@ -143,6 +158,11 @@ def test_in_a_game_it_tracks_the_players_pose_on_the_pitch():
     steered = np.asarray(used(state, estimate))
     truth = np.asarray(state.info["game_obs"]["features"][:, 0, PROPRIO_SIZE:])
     assert np.abs(steered[:, 6:10] - truth[:, 6:10]).max() < 0.6  # both goals, in its heading frame
+    assert view.observation_layout()["state"][-1] == ("tracker", TRACKER_INPUT_SIZE)  # its network reads them too
+    inputs = np.asarray(state.obs["state"][:, -TRACKER_INPUT_SIZE:])
+    np.testing.assert_allclose(inputs, np.asarray(jax.vmap(lambda t: tracker_inputs(t, *view._goal_xy))(
+        state.info["tracker"])), atol=1e-5)
+    assert np.all(inputs[:, 0] == 1.0) and np.abs(inputs[:, 1:5] - truth[:, 6:10]).max() < 0.6
 
 
 def test_a_tracker_needs_a_vision_player_that_estimates_the_game():
@@ -154,6 +174,23 @@ def test_a_tracker_needs_a_vision_player_that_estimates_the_game():
 
     with pytest.raises(ValueError, match="vision_tracker .* needs vision"):
         make("soccer-1v1", vision_tracker=True)
+    with pytest.raises(ValueError, match="vision_tracker_inputs .* needs vision_tracker"):
+        make("soccer-1v1-vision", vision_tracker_inputs=True)
     walker = dataclasses.replace(load_walker("assets/policies/op3-walker", prior="placo"), prior=None)
     with pytest.raises(ValueError, match="needs a player that estimates the game"):
         LearnerView(make("soccer-1v1-vision", vision_tracker=True), walker=walker)
+
+
+def test_a_drill_refuses_a_player_that_reads_its_tracker(tmp_path):
+    import dataclasses
+
+    import yaml
+
+    from policies.config import TrainConfig, to_dict
+    from policies.drill import run_drill
+
+    config = TrainConfig(task="soccer-1v1-vision").resolved()
+    env = dataclasses.replace(config.env, vision_tracker=True, vision_tracker_inputs=True)
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump(to_dict(dataclasses.replace(config, env=env))))
+    with pytest.raises(ValueError, match="drills play without the tracker"):
+        run_drill("empty-goal", str(tmp_path), episodes=1, seed=0, progress=False)

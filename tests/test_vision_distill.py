@@ -237,8 +237,12 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
                                                 "opponent_goal", "own_goal"]
     capsys.readouterr()
     assert main(["eval", str(tmp_path / "student"), "--opponent", "placo", "--episodes", "1", "--num-envs", "1",
-                 "--physics", "native", "--threads", "1", "--json"]) == 0
-    errors = json.loads(capsys.readouterr().out)["estimate_rms_m"]  # how far its estimate was from the truth
+                 "--physics", "native", "--threads", "1", "--json", "--compare-teacher"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["teacher"]["run"] == str(placo_teacher)  # its teacher played the same game
+    assert report["goals_vs_teacher"]["games"] == 1
+    assert report["goals_vs_teacher"]["baseline_goals"] == report["teacher"]["goals_for_per_episode"]
+    errors = report["estimate_rms_m"]  # how far its estimate was from the truth
     near, share = errors.pop("ball_near"), errors.pop("ball_near_share")  # the ball when near: some steps or none
     assert sorted(errors) == ["ball", "first_other", "opponent_goal", "own_goal"]
     assert all(0.0 < e < 100.0 for e in errors.values())

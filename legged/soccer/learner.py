@@ -25,8 +25,8 @@ from legged.soccer.opponents import (Opponent, OpponentNet, ball_pan, network_ac
                                      scripted_opponent)
 from legged.soccer.placo_player import load_tables
 from legged.soccer.sightings import SIGHTED, SIGHTING_SIZE
-from legged.soccer.tracker import (tracked_features, tracked_pose, tracker_kickoff, tracker_sight, tracker_start,
-                                   tracker_step)
+from legged.soccer.tracker import (TRACKER_INPUT_SIZE, tracked_features, tracked_pose, tracker_inputs,
+                                   tracker_kickoff, tracker_sight, tracker_start, tracker_step)
 from legged.soccer.vision import soccer_camera
 from legged.soccer.walker import COMMAND_SIZE, Walker, getting_up
 
@@ -303,7 +303,10 @@ class LearnerView(MjxEnv):
         return tracker_sight(tracker, sightings, self._net_xy, self.config.scene.goal_width)
 
     def observation_layout(self) -> dict:
-        return self.game.observation_layout()
+        layout = self.game.observation_layout()
+        if self.config.vision_tracker_inputs:  # the learner's state ends with what its tracker knows
+            layout = dict(layout, state=layout["state"] + [("tracker", TRACKER_INPUT_SIZE)])
+        return layout
 
     @property
     def uses_cameras(self) -> bool:
@@ -334,6 +337,9 @@ class LearnerView(MjxEnv):
             metrics["estimate_ball_near_steps"] = steps[-1]  # to pool ball_near over episodes
         info = {**game.info, "game_obs": game.obs}
         obs = {k: v[LEARNER] for k, v in game.obs.items()}
+        if self.config.vision_tracker_inputs:
+            inputs = tracker_inputs(game.info["tracker"], self._goal_xy[0], self._goal_xy[1])
+            obs["state"] = jnp.concatenate([obs["state"], inputs])
         if self.teacher_prior:  # what the teacher's corrections were added to, from the state it reads
             obs["command_prior"] = self.walker.prior_actions(obs["features"][None], self.tables)[0]
         return State(game.pipeline_state, obs, game.reward[LEARNER], game.done, metrics, info)

@@ -79,7 +79,11 @@ class SoccerConfig(EnvConfig):
     """With `vision`, for a player that estimates the game (command_prior=placo): its placo command reads the goals
     and the ball from a tracker (legged.soccer.tracker: its pose on the pitch by odometry and the goal nets its
     camera sights, the ball where it last saw it) wherever the tracker knows them, from its own estimate
-    elsewhere. The state is unchanged."""
+    elsewhere. The state is unchanged (see `vision_tracker_inputs`)."""
+    vision_tracker_inputs: bool = False
+    """With `vision_tracker`: the learner's 'state' also ends with what its tracker knows (legged.soccer.tracker
+    .tracker_inputs: locked on, both goals, ball fresh, the ball; heading frame, zeros where it knows nothing),
+    so that its network's corrections can use it too."""
     vision_sighted_ball: bool = False
     """With `vision_sightings`, for a player that estimates the game (command_prior=placo): the placo command
     takes the ball's position from the sighting whenever the camera sees the ball, from the player's own
@@ -112,6 +116,9 @@ class SoccerConfig(EnvConfig):
                              "player's state: it needs vision")
         if self.vision_tracker and not self.vision:
             raise ValueError("vision_tracker tracks a vision player's pose and the ball from its camera: it needs vision")
+        if self.vision_tracker_inputs and not self.vision_tracker:
+            raise ValueError("vision_tracker_inputs gives a vision player's network what its tracker knows: it needs "
+                             "vision_tracker")
         if self.vision_sighted_ball and not self.vision_sightings:
             raise ValueError("vision_sighted_ball steers by the ball the camera sees: it needs vision_sightings")
         if self.vision_heading and not self.vision:

@@ -122,6 +122,21 @@ def tracked_features(tracker, estimate, ball: slice, own_goal: slice, opponent_g
     return estimate.at[xy].set(jnp.where(fresh, ego(ball_xy), estimate[xy]))
 
 
+TRACKER_INPUT_SIZE = 8
+"""Length of `tracker_inputs`."""
+
+
+def tracker_inputs(tracker, own_xy, opponent_xy) -> jnp.ndarray:
+    """What the tracker knows as a network's inputs [TRACKER_INPUT_SIZE], in the heading frame: locked on (0/1),
+    the own and opponent goals' centres (`own_xy`, `opponent_xy`, world; zeros before it locks on), the ball
+    fresh (0/1: seen within BALL_MEMORY_S, once locked on) and its x, y (zeros unless fresh)."""
+    pose, _, locked, ball_xy, known, age = _unpack(tracker)
+    ego = lambda xy: yaw_rotate(pose[2], jnp.asarray(xy, jnp.float32) - pose[:2])
+    on = (locked > 0.5).astype(jnp.float32)
+    fresh = on * ((known > 0.5) & (age <= BALL_MEMORY_S)).astype(jnp.float32)
+    return jnp.concatenate([on[None], on * ego(own_xy), on * ego(opponent_xy), fresh[None], fresh * ego(ball_xy)])
+
+
 def tracked_pose(tracker) -> tuple[jnp.ndarray, jnp.ndarray]:
     """(the tracked pose x, y, yaw, whether the tracker is locked on)."""
     pose, _, locked, *_ = _unpack(tracker)
