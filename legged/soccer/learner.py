@@ -211,7 +211,7 @@ class LearnerView(MjxEnv):
             world = tracked_features(state.info["tracker"], world, parts["ball"], parts["own_goal"],
                                      parts["opponent_goal"], self._goal_xy[0], self._goal_xy[1])
         if self.config.vision_sighted_ball:
-            sighting = self._sightings(state)[0]  # the ball's: seen, then x, y, z
+            sighting = self._sightings(state.info)[0]  # the ball's: seen, then x, y, z
             ball = self.estimate_parts["ball"]
             world = world.at[ball].set(jnp.where(sighting[0] > 0, sighting[1:], world[ball]))
         truth = state.info["game_obs"]["features"][LEARNER, PROPRIO_SIZE:]
@@ -232,7 +232,7 @@ class LearnerView(MjxEnv):
     def sighting_points(self, state: State) -> jax.Array:
         """World positions [3, 3] of what the learner's camera sights (`vision_sightings`: the ball, its own goal's
         net, the opponent goal's net), NaN where not in view; jittable."""
-        sight = self._sightings(state)
+        sight = self._sightings(state.info)
         xy, height = self._in_world(state, sight[:, 1:3])
         points = jnp.concatenate([xy, height + sight[:, 3:]], -1)
         return jnp.where(sight[:, :1] > 0, points, jnp.nan)
@@ -246,9 +246,10 @@ class LearnerView(MjxEnv):
         points = jnp.concatenate([jnp.stack([pose[:2], ahead]), jnp.full((2, 1), height)], -1)
         return jnp.where(locked, points, jnp.nan)
 
-    def _sightings(self, state: State) -> jax.Array:
-        """The learner's sightings (`vision_sightings` or `vision_tracker`), [len(SIGHTED), SIGHTING_SIZE]."""
-        return state.info["sightings"][LEARNER].reshape(len(SIGHTED), SIGHTING_SIZE)
+    def _sightings(self, info: dict) -> jax.Array:
+        """The learner's sightings in a state's `info` (`vision_sightings` or `vision_tracker`), [len(SIGHTED),
+        SIGHTING_SIZE]."""
+        return info["sightings"][LEARNER].reshape(len(SIGHTED), SIGHTING_SIZE)
 
     def _in_world(self, state: State, ego: jax.Array) -> tuple[jax.Array, jax.Array]:
         """(world x, y [k, 2] of points `ego` [k, 2] in the learner's heading frame, the learner's torso height)."""
@@ -299,8 +300,7 @@ class LearnerView(MjxEnv):
 
     def _sight(self, tracker: jax.Array, info: dict) -> jax.Array:
         """The learner's tracker corrected by its camera's sightings in the game's `info`."""
-        sightings = info["sightings"][LEARNER].reshape(len(SIGHTED), SIGHTING_SIZE)
-        return tracker_sight(tracker, sightings, self._net_xy, self.config.scene.goal_width)
+        return tracker_sight(tracker, self._sightings(info), self._net_xy, self.config.scene.goal_width)
 
     def observation_layout(self) -> dict:
         layout = self.game.observation_layout()

@@ -112,14 +112,11 @@ def tracked_features(tracker, estimate, ball: slice, own_goal: slice, opponent_g
     """The game features `estimate` (a player's own estimate, heading frame) with what the tracker knows put in:
     both goals' centres (`own_xy`, `opponent_xy`, world) once locked on, the ball's x, y if seen within
     BALL_MEMORY_S."""
-    pose, _, locked, ball_xy, known, age = _unpack(tracker)
-    ego = lambda xy: yaw_rotate(pose[2], jnp.asarray(xy, jnp.float32) - pose[:2])
-    on = locked > 0.5
-    estimate = estimate.at[own_goal].set(jnp.where(on, ego(own_xy), estimate[own_goal]))
-    estimate = estimate.at[opponent_goal].set(jnp.where(on, ego(opponent_xy), estimate[opponent_goal]))
-    fresh = on & (known > 0.5) & (age <= BALL_MEMORY_S)
+    on, own, opponent, fresh, ball_ego = _known(tracker, own_xy, opponent_xy)
+    estimate = estimate.at[own_goal].set(jnp.where(on, own, estimate[own_goal]))
+    estimate = estimate.at[opponent_goal].set(jnp.where(on, opponent, estimate[opponent_goal]))
     xy = slice(ball.start, ball.start + 2)
-    return estimate.at[xy].set(jnp.where(fresh, ego(ball_xy), estimate[xy]))
+    return estimate.at[xy].set(jnp.where(fresh, ball_ego, estimate[xy]))
 
 
 TRACKER_INPUT_SIZE = 8
@@ -130,17 +127,24 @@ def tracker_inputs(tracker, own_xy, opponent_xy) -> jnp.ndarray:
     """What the tracker knows as a network's inputs [TRACKER_INPUT_SIZE], in the heading frame: locked on (0/1),
     the own and opponent goals' centres (`own_xy`, `opponent_xy`, world; zeros before it locks on), the ball
     fresh (0/1: seen within BALL_MEMORY_S, once locked on) and its x, y (zeros unless fresh)."""
-    pose, _, locked, ball_xy, known, age = _unpack(tracker)
-    ego = lambda xy: yaw_rotate(pose[2], jnp.asarray(xy, jnp.float32) - pose[:2])
-    on = (locked > 0.5).astype(jnp.float32)
-    fresh = on * ((known > 0.5) & (age <= BALL_MEMORY_S)).astype(jnp.float32)
-    return jnp.concatenate([on[None], on * ego(own_xy), on * ego(opponent_xy), fresh[None], fresh * ego(ball_xy)])
+    on, own, opponent, fresh, ball_ego = _known(tracker, own_xy, opponent_xy)
+    on, fresh = on.astype(jnp.float32), fresh.astype(jnp.float32)
+    return jnp.concatenate([on[None], on * own, on * opponent, fresh[None], fresh * ball_ego])
 
 
 def tracked_pose(tracker) -> tuple[jnp.ndarray, jnp.ndarray]:
     """(the tracked pose x, y, yaw, whether the tracker is locked on)."""
     pose, _, locked, *_ = _unpack(tracker)
     return pose, locked > 0.5
+
+
+def _known(tracker, own_xy, opponent_xy):
+    """(locked on, the own and opponent goals' centres in the heading frame, the ball fresh: seen within
+    BALL_MEMORY_S once locked on, the ball in the heading frame) of a tracker."""
+    pose, _, locked, ball_xy, known, age = _unpack(tracker)
+    ego = lambda xy: yaw_rotate(pose[2], jnp.asarray(xy, jnp.float32) - pose[:2])
+    on = locked > 0.5
+    return on, ego(own_xy), ego(opponent_xy), on & (known > 0.5) & (age <= BALL_MEMORY_S), ego(ball_xy)
 
 
 def _net_update(pose, cov, sight, centre, locked, across: float):
