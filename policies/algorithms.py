@@ -12,7 +12,7 @@ read, which model classes it builds, and which loss it adds.
 | rma        | teacher's head on (state, enc(history))     | the teacher's actor          | z regression (policies.distill) |
 | kl         | CNN + MLP on (state, camera)                | MLP on privileged_state      | PPO + KL to a state teacher (policies.teacher_kl) |
 
-A dagger vision student with `distill.student_memory` has a GRU between its features and its head
+A dagger or kl vision student with `distill.student_memory` has a GRU between its features and its head
 (policies.memory_models).
 
 Vision students (dagger and kl on soccer-1v1-vision) read (state, camera), and their teacher, a state soccer
@@ -78,7 +78,7 @@ def actor_model(config: TrainConfig, std: float, camera: bool = False) -> dict:
     """rsl-rl model config of the actor of `config.algo` (dagger: of its student)."""
     ppo, lat, algo = config.ppo, config.latent, config.algo
     base = _mlp(ppo.actor_hidden, ppo.activation, ppo.obs_normalization, std, camera)
-    if camera and algo == "dagger" and config.distill.student_memory:
+    if camera and algo in ("dagger", "kl") and config.distill.student_memory:
         from policies.memory_models import MemoryCNNModel
 
         base.update(class_name=MemoryCNNModel, memory_dim=config.distill.student_memory)
@@ -160,7 +160,7 @@ class WorldLabeller(MLPModel):
         if "command_prior" in obs.keys() and math.isfinite(self.margin):
             prior, bound = obs["command_prior"], 1.0 + self.margin
             corrections = (corrections + prior).clamp(-bound, bound) - prior
-        return torch.cat([corrections, obs["features"][:, -self.world_size:]], dim=-1)
+        return torch.cat([corrections, obs["features"][..., -self.world_size:]], dim=-1)
 
 
 def teacher_model(teacher: TrainConfig, student: TrainConfig | None = None) -> dict:
@@ -264,18 +264,21 @@ def privileged_slices(layout: dict, names=DYNAMICS_GROUPS) -> list[slice]:
 
 
 def attach_teacher_kl(alg: PPO, config: TrainConfig, teacher: TrainConfig, payload: dict, obs: TensorDict,
-                      iteration: int) -> None:
+                      num_actions: int, iteration: int) -> None:
     """Give a kl student's PPO its pull towards the frozen teacher (policies.teacher_kl), the teacher's actor
-    rebuilt from its config and loaded from its checkpoint `payload`."""
+    rebuilt from its config and loaded from its checkpoint `payload` (for a student that estimates the game, a
+    WorldLabeller whose labels are as many as the student's actions)."""
     from rsl_rl.utils import resolve_class
 
     from policies.teacher_kl import TeacherKL
 
-    cls, kwargs = resolve_class(teacher_model(teacher))
-    model = cls(obs, {"teacher": teacher_inputs(teacher)}, "teacher", payload["num_actions"], **kwargs)
+    cls, kwargs = resolve_class(teacher_model(teacher, config))
+    labels = num_actions if config.estimates_world else payload["num_actions"]  # the student's, or the teacher's
+    model = cls(obs, {"teacher": teacher_inputs(teacher)}, "teacher", labels, **kwargs)
     model.load_state_dict(payload["alg"]["actor_state_dict"], strict=True)
     d = config.distill
-    alg.symmetry = TeacherKL(model, d.kl_weight, d.kl_decay, iteration)
+    alg.symmetry = TeacherKL(model, d.kl_weight, d.kl_decay, iteration, actor=alg.actor,
+                             critic_warmup=d.critic_warmup)
 
 
 def attach_information_bottleneck(alg: PPO, config: TrainConfig, layout: dict, seed: int) -> None:

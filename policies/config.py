@@ -123,11 +123,15 @@ class DistillConfig:
     """kl: initial weight of KL(teacher || student) added to the student's PPO loss (policies.teacher_kl)."""
     kl_decay: float = 0.995
     """kl: factor applied to that weight after every iteration."""
+    critic_warmup: int = 0
+    """kl: first iterations in which only the critic learns (the actor frozen), so that PPO's first advantages
+    come from a trained value function (for a student started from an earlier one, distill.student_init)."""
     student_memory: int = 0
-    """dagger vision students: size of a GRU memory between features and head (0: none; policies.memory_models)."""
+    """dagger and kl vision students: size of a GRU memory between features and head (0: none;
+    policies.memory_models)."""
     student_init: str = ""
-    """dagger vision students: an earlier vision student (its run directory's newest checkpoint, or a checkpoint
-    file in it) whose camera encoder and normaliser this one starts from."""
+    """dagger and kl vision students: an earlier dagger vision student (its run directory's newest checkpoint, or
+    a checkpoint file in it) whose camera encoder and normaliser this one starts from."""
     student_init_whole: bool = False
     """With student_init: start from that student whole (encoder, memory, head, normaliser, noise), which must
     fit this one, e.g. the second stage of a curriculum (the empty-goal drill first, then the game)."""
@@ -303,13 +307,17 @@ def _check_algo(cfg: TrainConfig, entry) -> TrainConfig:
     if cfg.algo not in ALGOS:
         raise ConfigError(f"algo must be one of {', '.join(ALGOS)}, got {cfg.algo!r}")
     d, vision_soccer = cfg.distill, entry.kind == "soccer" and entry.vision and cfg.backend == "rsl"
-    if (d.student_memory or d.student_init) and not (cfg.algo == "dagger" and vision_soccer):
-        raise ConfigError(f"distill.student_memory and distill.student_init are for dagger vision students (legged "
-                          f"distill ... --task soccer-1v1-vision --method dagger), not --algo {cfg.algo} on {cfg.task}")
-    if cfg.estimates_world and cfg.algo != "dagger":
+    if (d.student_memory or d.student_init) and not (cfg.algo in ("dagger", "kl") and vision_soccer):
+        raise ConfigError(f"distill.student_memory and distill.student_init are for dagger and kl vision students "
+                          f"(legged distill ... --task soccer-1v1-vision --method dagger|kl), not --algo {cfg.algo} "
+                          f"on {cfg.task}")
+    if cfg.estimates_world and cfg.algo not in ("dagger", "kl"):
         raise ConfigError(f"command_prior=placo on a vision task makes the player estimate the ball, goals and "
-                          f"opponent as actions, which only a dagger student learns (legged distill ... --method "
-                          f"dagger), not --algo {cfg.algo}")
+                          f"opponent as actions, which only a distilled student learns (legged distill ... --method "
+                          f"dagger|kl), not --algo {cfg.algo}")
+    if d.critic_warmup and cfg.algo != "kl":
+        raise ConfigError(f"distill.critic_warmup (iterations in which only PPO's critic learns) is for --method kl, "
+                          f"not {cfg.algo}")
     if d.label_weights:
         _check_label_weights(cfg)
     if d.teacher_act_fraction and cfg.algo != "dagger":
@@ -322,6 +330,10 @@ def _check_algo(cfg: TrainConfig, entry) -> TrainConfig:
         raise ConfigError(f"--algo {cfg.algo} distils a teacher: use `legged distill TEACHER_RUN --method {cfg.algo}`")
     if cfg.algo in ("dagger", "kl") and vision_soccer:
         _check_distill(cfg.distill)  # a camera student of a state soccer player (policies.distill)
+        if cfg.algo == "kl" and d.student_memory and cfg.num_envs % cfg.ppo.num_mini_batches:
+            raise ConfigError(f"a kl student with memory learns from whole trajectories, num_envs / "
+                              f"ppo.num_mini_batches environments at a time: num_envs ({cfg.num_envs}) must be a "
+                              f"multiple of ppo.num_mini_batches ({cfg.ppo.num_mini_batches})")
         return cfg
     if cfg.algo == "kl":
         raise ConfigError(f"--method kl distils a state soccer player into its vision task (--task "
@@ -380,11 +392,11 @@ def _check_distill(d: DistillConfig) -> None:
     if not (0 < d.learning_rate <= 1 and d.num_learning_epochs >= 1 and d.gradient_length >= 1
             and 0 < d.student_noise_std <= 10 and 0 <= d.kl_weight <= 1e3 and 0 < d.kl_decay <= 1
             and 0 <= d.student_memory <= 4096 and 0 <= d.teacher_act_fraction <= 1 and d.teacher_act_iterations >= 0
-            and d.correction_margin >= 0):
+            and d.correction_margin >= 0 and d.critic_warmup >= 0):
         raise ConfigError(f"distill: learning_rate in (0, 1], num_learning_epochs and gradient_length >= 1, "
                           f"student_noise_std in (0, 10], kl_weight in [0, 1000], kl_decay in (0, 1], student_memory "
                           f"in [0, 4096], teacher_act_fraction in [0, 1], teacher_act_iterations >= 0, "
-                          f"correction_margin >= 0; got {d}")
+                          f"correction_margin >= 0, critic_warmup >= 0; got {d}")
     if d.student_init_whole and not d.student_init:
         raise ConfigError("distill.student_init_whole takes the whole student of distill.student_init: name that run")
 

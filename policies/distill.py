@@ -19,7 +19,10 @@ Two kinds of teacher:
   `--set command_prior=placo` the student instead estimates what the placo command is computed from: its
   actions are the teacher's corrections and the game features after the proprioception (ball, goals,
   opponent), labelled by the teacher's outputs and the truth (policies.algorithms.WorldLabeller), and its game
-  adds the placo command computed from that estimate (legged.soccer.learner).
+  adds the placo command computed from that estimate (legged.soccer.learner). Such a student learns by kl too:
+  PPO on its return plus the KL of its corrections to the teacher's and the squared error of its estimate
+  (policies.teacher_kl), typically started whole from a dagger student (`distill.student_init`,
+  `student_init_whole`) with its critic warmed up first (`distill.critic_warmup`).
 """
 
 from __future__ import annotations
@@ -198,12 +201,16 @@ def load_teacher(config: TrainConfig, env) -> tuple[TrainConfig, dict]:
 
 
 def start_student(alg, config: TrainConfig, teacher: TrainConfig, payload: dict) -> None:
-    """Load the teacher's actor into a new distillation; rma also takes the teacher's head and normaliser."""
-    alg.load(payload["alg"], {"teacher": True}, strict=True)
+    """Load the teacher's actor into a new distillation (kl: the teacher is attached apart, policies.teacher_kl)
+    and `distill.student_init` into its student (kl: its actor); rma also takes the teacher's head and
+    normaliser."""
+    student = alg.actor if config.algo == "kl" else alg.student
+    if config.algo != "kl":
+        alg.load(payload["alg"], {"teacher": True}, strict=True)
     if config.distill.student_init_whole:
-        load_student_whole(alg.student, Path(config.distill.student_init))
+        load_student_whole(student, Path(config.distill.student_init))
     elif config.distill.student_init:
-        load_student_encoder(alg.student, Path(config.distill.student_init))
+        load_student_encoder(student, Path(config.distill.student_init))
     if config.algo != "rma":
         return
     student, source = alg.student, alg.teacher

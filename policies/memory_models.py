@@ -5,7 +5,8 @@ its state teacher always knows both. `MemoryCNNModel` (the actor of a vision stu
 `distill.student_memory` > 0) gives it memory, as the anchors' vision players have (Tirumala et al. 2024): the
 image's CNN features and the normalised state go through a GRU, and the MLP head reads the GRU's output beside
 the current features (the present need not pass through the memory). rsl-rl's Distillation trains it by
-truncated backpropagation through time (`distill.gradient_length` steps).
+truncated backpropagation through time (`distill.gradient_length` steps); rsl-rl's PPO (`--method kl`) on the
+padded trajectories of its rollouts.
 
 `DeployedMemoryActor` is its deterministic actor for deployment and export: (state, camera, memory) ->
 (actions, memory), the memory a [1, n, memory_dim] tensor that starts at zero in every episode.
@@ -18,6 +19,7 @@ import copy
 import torch
 from rsl_rl.models import CNNModel
 from rsl_rl.modules import RNN
+from rsl_rl.utils import unpad_trajectories
 from tensordict import TensorDict
 
 
@@ -34,11 +36,15 @@ class MemoryCNNModel(CNNModel):
         self.rnn = RNN(self.obs_dim + self.cnn_latent_dim, memory_dim, 1, "gru")
 
     def get_latent(self, obs: TensorDict, masks=None, hidden_state=None) -> torch.Tensor:
-        if masks is not None:
-            raise ValueError("a memory student learns by distillation, step by step; PPO's padded trajectories "
-                             "(masks) are refused by the config (distill.student_memory is for --method dagger)")
-        features = super().get_latent(obs)
-        return torch.cat([self.rnn(features, None, hidden_state).squeeze(0), features], dim=-1)
+        """[GRU output, features] of one step of every environment, or (PPO's update: `masks` and the
+        trajectories' first `hidden_state`) of the valid steps of padded trajectories [time, trajectories]."""
+        if masks is None:
+            features = super().get_latent(obs)
+            return torch.cat([self.rnn(features, None, hidden_state).squeeze(0), features], dim=-1)
+        steps = obs.batch_size[:2]  # the CNN reads images [n, channels, height, width]: fold time into n
+        features = super().get_latent(obs.flatten(0, 1)).unflatten(0, steps)
+        memory = self.rnn(features, masks, hidden_state)
+        return torch.cat([memory, unpad_trajectories(features, masks)], dim=-1)
 
     def reset(self, dones: torch.Tensor | None = None, hidden_state=None) -> None:
         """Forget the episodes that ended (`dones`), or set the memory of every environment."""

@@ -135,7 +135,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     if hib:
         attach_information_bottleneck(alg, config, env.observation_layout(), seed=config.seed + 7 * iteration)
     if config.algo == "kl":
-        attach_teacher_kl(alg, config, *teacher, venv.get_observations(), iteration)
+        attach_teacher_kl(alg, config, *teacher, venv.get_observations(), env.action_size, iteration)
     if payload is not None:
         alg.load(payload["alg"], None, strict=True)
         if isinstance(alg, Distillation):  # its schedule (policies.distill.MixedDAgger) goes on, at the config's rate
@@ -145,7 +145,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                 group["lr"] = config.distill.learning_rate
         if launch.is_main:
             torch.set_rng_state(payload["torch_rng"])
-    elif teacher is not None and config.algo != "kl":  # kl: a fresh student, pulled towards its teacher
+    elif teacher is not None:  # kl: a fresh student (or distill.student_init's), pulled towards its teacher
         from policies.distill import start_student
 
         start_student(alg, config, *teacher)

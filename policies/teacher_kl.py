@@ -7,48 +7,81 @@ the state. The weight starts at `distill.kl_weight` and is multiplied by `distil
 iteration, so the student leans on the teacher early and on its own return later (Haarnoja et al. decay the
 weight of their skill teachers; Tirumala et al. adapt it).
 
+A student that estimates the game (command_prior=placo: its actions are corrections, then the game features
+its placo command is computed from) has more actions than its teacher's distribution: the teacher's labels
+beyond it (the true features, policies.algorithms.WorldLabeller) are regressed by the student's mean with
+the squared error of DAgger, at a weight of 1 that does not decay. A student started from an earlier one
+(distill.student_init) can first hold its actor still for `critic_warmup` iterations while the fresh critic
+learns its return.
+
 rsl-rl's PPO adds an extension's loss to its own through the symmetry seam (as HIB does, policies.hib):
-this class fills it, so PPO's update runs unchanged.
+this class fills it, so PPO's update runs unchanged (on the valid steps of padded trajectories when the
+student has memory).
 """
 
 from __future__ import annotations
 
 import torch
+from rsl_rl.utils import unpad_trajectories
 
 
 class TeacherKL:
-    """`weight * KL(teacher || student)` on the mini-batch PPO just evaluated (see the module docstring)."""
+    """`weight * KL(teacher || student)` (+ the squared error of estimated labels) on the mini-batch PPO just
+    evaluated (see the module docstring)."""
 
     use_mirror_loss = True
+    mirror_loss_coeff = 1.0
+    """rsl-rl multiplies the returned loss by it; the weights are applied inside."""
 
-    def __init__(self, teacher: torch.nn.Module, weight: float, decay: float, iteration: int = 0):
+    def __init__(self, teacher: torch.nn.Module, weight: float, decay: float, iteration: int = 0,
+                 actor: torch.nn.Module | None = None, critic_warmup: int = 0):
         self.teacher = teacher.eval()
         for p in self.teacher.parameters():
             p.requires_grad_(False)
-        self.decay = decay
-        self.mirror_loss_coeff = weight * decay ** iteration
-        """The current weight (rsl-rl multiplies the returned loss by it)."""
-        self._sum, self._count = 0.0, 0
+        self.decay, self.weight = decay, weight * decay ** iteration
+        self.actor, self.iteration, self.critic_warmup = actor, iteration, critic_warmup
+        self._sums, self._count = {"teacher_kl": 0.0}, 0
+        self._hold_actor()
 
     def augment_batch(self, batch, original_batch_size: int) -> None:
         """No augmentation (the seam's first call)."""
 
     def compute_loss(self, actor, batch, original_batch_size: int) -> torch.Tensor:
-        """Mean KL(teacher || student) of the batch; the student's distribution is PPO's last forward pass."""
+        """weight x mean KL(teacher || student) over the teacher's actions (the student's distribution is PPO's
+        last forward pass), plus the mean squared error of the student's further actions to the teacher's labels."""
+        masks = getattr(batch, "masks", None)  # set by a recurrent rollout: padded trajectories
+        obs = batch.observations if masks is None else unpad_trajectories(batch.observations, masks)
         with torch.no_grad():
-            self.teacher(batch.observations, stochastic_output=True)
+            labels = self.teacher(obs, stochastic_output=True)  # sets its distribution; the labels beyond are exact
             teacher = self.teacher.output_distribution_params
-        kl = actor.get_kl_divergence(teacher, actor.output_distribution_params).mean()
-        self._sum += float(kl.detach())
+        mean, std = actor.output_distribution_params
+        k = teacher[0].shape[-1]
+        kl = actor.get_kl_divergence(teacher, (mean[..., :k], std[..., :k])).mean()
+        loss = self.weight * kl
+        self._sums["teacher_kl"] += float(kl.detach())
+        if mean.shape[-1] > k:  # the game it estimates, labelled by the truth
+            estimate = ((mean[..., k:] - labels[..., k:]) ** 2).mean()
+            loss = loss + estimate
+            self._sums["estimate_mse"] = self._sums.get("estimate_mse", 0.0) + float(estimate.detach())
         self._count += 1
-        return kl
+        return loss
 
     def end_iteration(self) -> None:
-        """Decay the weight (once per training iteration)."""
-        self.mirror_loss_coeff *= self.decay
+        """Decay the weight; free the actor once the critic's warm-up is over (once per training iteration)."""
+        self.weight *= self.decay
+        self.iteration += 1
+        self._hold_actor()
+
+    def _hold_actor(self) -> None:
+        """The actor's parameters learn only after `critic_warmup` iterations."""
+        if self.actor is not None:
+            for p in self.actor.parameters():
+                p.requires_grad_(self.iteration >= self.critic_warmup)
 
     def means(self) -> dict:
-        """Mean KL to the teacher since the last call (then reset) and the weight in use."""
-        out = {"teacher_kl": self._sum / max(self._count, 1), "teacher_kl_weight": self.mirror_loss_coeff}
-        self._sum, self._count = 0.0, 0
+        """Mean KL to the teacher (and error of the estimated labels) since the last call (then reset), the
+        weight in use, and whether the actor was held still."""
+        out = {k: v / max(self._count, 1) for k, v in self._sums.items()}
+        out.update(teacher_kl_weight=self.weight, actor_frozen=float(self.iteration < self.critic_warmup))
+        self._sums, self._count = dict.fromkeys(self._sums, 0.0), 0
         return out

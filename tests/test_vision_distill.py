@@ -14,7 +14,7 @@ from tensordict import TensorDict
 from legged.cli import main
 from policies.algorithms import build_algorithm
 from policies.config import TrainConfig, apply_overrides
-from policies.rsl_backend import dummy_observations, save_checkpoint
+from policies.rsl_backend import dummy_observations, load_checkpoint, save_checkpoint
 from policies.run_dir import RunDir
 from policies.teacher_kl import TeacherKL
 
@@ -33,7 +33,7 @@ def test_teacher_kl_is_zero_for_the_teacher_itself_and_trains_the_student_only()
     teacher, student = _gaussian_mlp(3, 0), _gaussian_mlp(3, 0)
     batch = type("Batch", (), {"observations": TensorDict({"x": torch.randn(64, 3)}, batch_size=[64])})()
     kl = TeacherKL(teacher, weight=2.0, decay=0.5, iteration=1)
-    assert kl.mirror_loss_coeff == pytest.approx(1.0)  # 2 x 0.5^1: a resumed run goes on with its weight
+    assert kl.weight == pytest.approx(1.0)  # 2 x 0.5^1: a resumed run goes on with its weight
     student(batch.observations, stochastic_output=True)
     assert float(kl.compute_loss(student, batch, 64).detach()) == pytest.approx(0.0, abs=1e-6)
     other = _gaussian_mlp(3, 1)
@@ -43,7 +43,7 @@ def test_teacher_kl_is_zero_for_the_teacher_itself_and_trains_the_student_only()
     assert float(loss.detach()) > 0.01 and all(p.grad is None for p in teacher.parameters())
     assert any(p.grad is not None and p.grad.abs().sum() > 0 for p in other.parameters())
     kl.end_iteration()
-    assert kl.mirror_loss_coeff == pytest.approx(0.5) and kl.means()["teacher_kl"] > 0
+    assert kl.weight == pytest.approx(0.5) and kl.means()["teacher_kl"] > 0
 
 
 @pytest.fixture(scope="module")
@@ -219,10 +219,10 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
         torch.testing.assert_close(with_margin(obs)[:, :3], clipped)
         assert (clipped + obs["command_prior"]).abs().max() <= 1.0 + margin
 
-    assert main(["distill", str(placo_teacher), "--method", "kl", "--task", "soccer-1v1-vision", "--run-dir",
-                 str(tmp_path / "kl"), "--set", "command_prior=placo"]) == 2
+    assert main(["train", "soccer-1v1-vision", "--run-dir", str(tmp_path / "ppo"), "--set", f"walker={WALKER}",
+                 "--set", "command_prior=placo"]) == 2
     err = capsys.readouterr().err
-    assert "only a dagger student" in err and err.count("\n") == 1, err
+    assert "only a distilled student" in err and err.count("\n") == 1, err
     record = start_distill(str(placo_teacher), "dagger", str(tmp_path / "student"), timesteps=16, progress=False,
                            task="soccer-1v1-vision", overrides=["command_prior=placo"])
     assert record["step"] == 16 and np.isfinite(record["loss_behavior"]) and "loss_behavior_ball" in record
@@ -248,12 +248,26 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
     assert all(0.0 < e < 100.0 for e in errors.values())
     assert 0.0 <= share <= 1.0 and (near is None if share == 0.0 else 0.0 < near < 100.0)
 
+    # KL-regularised RL from that student: its critic learns first, its actor held still, then both
+    record = start_distill(str(placo_teacher), "kl", str(tmp_path / "kl"), timesteps=16, progress=False,
+                           task="soccer-1v1-vision", overrides=["command_prior=placo", "checkpoint_every=1",
+                                                                f"distill.student_init={tmp_path / 'student'}",
+                                                                "distill.student_init_whole=true",
+                                                                "distill.critic_warmup=1"])
+    assert record["actor_frozen"] == 0.0 and np.isfinite(record["estimate_mse"]) and record["teacher_kl"] > 0
+    first, last = (load_checkpoint(path)["alg"]["actor_state_dict"] for path in RunDir(tmp_path / "kl").checkpoints())
+    dagger = load_checkpoint(RunDir(tmp_path / "student").latest_checkpoint())["alg"]["student_state_dict"]
+    learned = [k for k in first if not k.startswith("obs_normalizer.")]
+    assert all(torch.equal(first[k], dagger[k]) for k in learned)  # held still in the critic's warm-up
+    assert any(not torch.equal(last[k], first[k]) for k in learned)  # then trained
+    kl_student, kl_cfg = load_policy(tmp_path / "kl")
+    assert kl_cfg.algo == "kl" and kl_cfg.estimates_world and kl_student.num_actions == 17
+
 
 def test_a_curriculum_distils_on_the_empty_goal_drill_then_takes_that_student_whole(placo_teacher, tmp_path, capsys):
     from legged.soccer.drills import DrillConfig, DrillEnv
     from policies.distill import start_distill
     from policies.drill import drill_env
-    from policies.rsl_backend import load_checkpoint
     from policies.training import build_env
 
     student = ["command_prior=placo", "env.vision_gaze=true", "env.scene.head_camera_fovy_deg=70"]
@@ -322,7 +336,8 @@ def test_a_memory_student_starts_from_another_remembers_forgets_on_reset_and_exp
     from policies.policy_io import load_policy
 
     memory = ["distill.student_memory=8", "distill.gradient_length=2"]
-    for method, extra, message in (("kl", memory, "for dagger vision students"),
+    for method, extra, message in (("kl", memory + ["ppo.num_mini_batches=4"], "a multiple of ppo.num_mini_batches"),
+                                   ("dagger", ["distill.critic_warmup=2"], "is for --method kl"),
                                    ("kl", ["distill.teacher_act_fraction=0.5"], "DAgger's beta"),
                                    ("dagger", ["distill.student_init=" + str(soccer_teacher)], "not a dagger vision")):
         assert main(["distill", str(soccer_teacher), "--method", method, "--task", "soccer-1v1-vision", "--run-dir",
@@ -354,6 +369,12 @@ def test_a_memory_student_starts_from_another_remembers_forgets_on_reset_and_exp
     np.testing.assert_allclose(policy.act(obs), first_step, atol=1e-6)
     check = export_onnx(policy, tmp_path / "memory.onnx", samples=4)
     assert check["inputs"] == ["obs", "camera", "memory"] and check["max_abs_diff"] <= 1e-4
+    record = start_distill(str(soccer_teacher), "kl", str(tmp_path / "kl"), timesteps=16, progress=False,
+                           task="soccer-1v1-vision", overrides=memory + [  # PPO on its trajectories, with memory
+                               f"distill.student_init={tmp_path / 'memory'}", "distill.student_init_whole=true",
+                               "env.vision_heading=true"])
+    assert record["step"] == 16 and np.isfinite(record["loss_surrogate"]) and record["teacher_kl"] > 0
+    assert load_policy(tmp_path / "kl")[0].recurrent
 
 
 def test_the_deployed_memory_actor_computes_what_the_trained_model_does():
@@ -383,6 +404,38 @@ def test_the_deployed_memory_actor_computes_what_the_trained_model_does():
             model.reset(done)
             memory[:, done == 1] = 0.0
     torch.testing.assert_close(memory, model.get_hidden_state())
+
+
+def test_a_memory_actor_reads_padded_trajectories_as_it_read_their_steps():
+    """PPO's update (rsl-rl's recurrent mini-batches: trajectories split at episode ends, padded, with the
+    memory at each trajectory's start) gives a MemoryCNNModel's outputs of the rollout's steps."""
+    from rsl_rl.utils import split_and_pad_trajectories
+
+    from policies.algorithms import CAMERA_CNN
+    from policies.memory_models import MemoryCNNModel
+
+    torch.manual_seed(0)
+    steps, n = 5, 3
+    rollout = TensorDict({"state": torch.randn(steps, n, 5), "camera": torch.rand(steps, n, 4, 30, 40)},
+                         batch_size=[steps, n])
+    dones = torch.zeros(steps, n, 1)
+    dones[1, 0] = dones[3, 2] = 1  # episodes end after these steps
+    model = MemoryCNNModel(rollout[0], {"actor": ["state", "camera"]}, "actor", 2, memory_dim=6, hidden_dims=[8],
+                           obs_normalization=True, cnn_cfg=dict(CAMERA_CNN),
+                           distribution_cfg={"class_name": "GaussianDistribution", "init_std": 0.5})
+    model.update_normalization(rollout[0])
+    model.eval()
+    model.reset(hidden_state=torch.randn(1, n, 6))  # an earlier rollout's memory
+    start = model.get_hidden_state().clone()
+    expected = []
+    with torch.no_grad():
+        for t in range(steps):
+            expected.append(model(rollout[t]))
+            model.reset(dones[t, :, 0])
+        padded, masks = split_and_pad_trajectories(rollout, dones)
+        first = torch.cat([start[:, :1], torch.zeros(1, 1, 6), start[:, 1:], torch.zeros(1, 1, 6)], dim=1)
+        actual = model(padded, masks=masks, hidden_state=first)  # trajectories: env 0 twice, 1, 2 twice
+    torch.testing.assert_close(actual, torch.stack(expected))
 
 
 def test_label_weights_weigh_named_groups_and_the_drill_ignores_the_absent_opponent():
