@@ -10,7 +10,8 @@ weight of their skill teachers; Tirumala et al. adapt it).
 A student that estimates the game (command_prior=placo: its actions are corrections, then the game features
 its placo command is computed from) has more actions than its teacher's distribution: the teacher's labels
 beyond it (the true features, policies.algorithms.WorldLabeller) are regressed by the student's mean with
-the squared error of DAgger, at a weight of 1 that does not decay. A student started from an earlier one
+the squared error of DAgger, at a weight of 1 that does not decay, and the KL's teacher mean is its
+corrections' label (clipped as `distill.correction_margin` says, raw by default). A student started from an earlier one
 (distill.student_init) can first hold its actor still for `critic_warmup` iterations while the fresh critic
 learns its return.
 
@@ -52,11 +53,13 @@ class TeacherKL:
         masks = getattr(batch, "masks", None)  # set by a recurrent rollout: padded trajectories
         obs = batch.observations if masks is None else unpad_trajectories(batch.observations, masks)
         with torch.no_grad():
-            labels = self.teacher(obs, stochastic_output=True)  # sets its distribution; the labels beyond are exact
-            teacher = self.teacher.output_distribution_params
+            self.teacher(obs, stochastic_output=True)  # sets its distribution
+            teacher_std = self.teacher.output_distribution_params[1]
+            labels = self.teacher(obs)  # its mean (a WorldLabeller's: corrections as distill.correction_margin
+            # clips them), then any labels beyond its distribution
         mean, std = actor.output_distribution_params
-        k = teacher[0].shape[-1]
-        kl = actor.get_kl_divergence(teacher, (mean[..., :k], std[..., :k])).mean()
+        k = teacher_std.shape[-1]
+        kl = actor.get_kl_divergence((labels[..., :k], teacher_std), (mean[..., :k], std[..., :k])).mean()
         loss = self.weight * kl
         self._sums["teacher_kl"] += float(kl.detach())
         if mean.shape[-1] > k:  # the game it estimates, labelled by the truth

@@ -46,6 +46,40 @@ def test_teacher_kl_is_zero_for_the_teacher_itself_and_trains_the_student_only()
     assert kl.weight == pytest.approx(0.5) and kl.means()["teacher_kl"] > 0
 
 
+def test_teacher_kl_of_a_student_that_estimates_the_game_uses_the_teachers_labels():
+    """KL on the corrections against the teacher's labels (clipped by its margin), squared error on the rest."""
+    from torch.distributions import Normal
+
+    from policies.algorithms import WorldLabeller
+
+    torch.manual_seed(0)
+    n, features, world = 16, 9, 4
+    obs = TensorDict({"features": torch.randn(n, features), "command_prior": torch.rand(n, 3) * 2 - 1}, batch_size=[n])
+    teacher = WorldLabeller(obs, {"teacher": ["features"]}, "teacher", 3 + world, corrections=3, margin=0.0,
+                            hidden_dims=[8], distribution_cfg={"class_name": "GaussianDistribution", "init_std": 0.5})
+    with torch.no_grad():
+        teacher.mlp[-1].bias.fill_(3.0)  # corrections the clip cuts: raw and clipped labels differ
+        labels = teacher(obs)
+    teacher_std = torch.full((n, 3), 0.5)
+
+    class Student:  # the actor's side of the seam: its last distribution and the KL of its distribution type
+        output_distribution_params = (labels.clone(), torch.cat([teacher_std, torch.full((n, world), 0.1)], -1))
+
+        @staticmethod
+        def get_kl_divergence(old, new):
+            return torch.distributions.kl_divergence(Normal(*old), Normal(*new)).sum(-1)
+
+    batch = type("Batch", (), {"observations": obs})()
+    kl = TeacherKL(teacher, weight=1.0, decay=1.0)
+    assert float(kl.compute_loss(Student, batch, n)) == pytest.approx(0.0, abs=1e-6)
+    means = kl.means()
+    assert means["teacher_kl"] == pytest.approx(0.0, abs=1e-6) and means["estimate_mse"] == pytest.approx(0.0)
+    Student.output_distribution_params[0][:, 3:] += 0.5  # the estimate off by 0.5 everywhere
+    assert float(kl.compute_loss(Student, batch, n)) == pytest.approx(0.25)
+    Student.output_distribution_params[0][:, :3] = teacher.mlp(teacher.get_latent(obs)).detach()  # raw corrections
+    assert kl.compute_loss(Student, batch, n) > 1.0  # beyond the clip: far from the teacher's clipped labels
+
+
 @pytest.fixture(scope="module")
 def soccer_teacher(tmp_path_factory):
     """An (untrained) state soccer player: config and one checkpoint."""
