@@ -266,15 +266,15 @@ def privileged_slices(layout: dict, names=DYNAMICS_GROUPS) -> list[slice]:
 def attach_teacher_kl(alg: PPO, config: TrainConfig, teacher: TrainConfig, payload: dict, obs: TensorDict,
                       num_actions: int, iteration: int) -> None:
     """Give a kl student's PPO its pull towards the frozen teacher (policies.teacher_kl), the teacher's actor
-    rebuilt from its config and loaded from its checkpoint `payload` (for a student that estimates the game, a
-    WorldLabeller whose labels are as many as the student's actions)."""
+    rebuilt from its config and loaded from its checkpoint `payload`, with as many outputs as the student's
+    `num_actions` (policies.distill.load_teacher checked them: the teacher's, and for a student that estimates
+    the game, a WorldLabeller's, the game features after them)."""
     from rsl_rl.utils import resolve_class
 
     from policies.teacher_kl import TeacherKL
 
     cls, kwargs = resolve_class(teacher_model(teacher, config))
-    labels = num_actions if config.estimates_world else payload["num_actions"]  # the student's, or the teacher's
-    model = cls(obs, {"teacher": teacher_inputs(teacher)}, "teacher", labels, **kwargs)
+    model = cls(obs, {"teacher": teacher_inputs(teacher)}, "teacher", num_actions, **kwargs)
     model.load_state_dict(payload["alg"]["actor_state_dict"], strict=True)
     d = config.distill
     alg.symmetry = TeacherKL(model, d.kl_weight, d.kl_decay, iteration, actor=alg.actor,

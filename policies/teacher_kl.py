@@ -53,13 +53,12 @@ class TeacherKL:
         masks = getattr(batch, "masks", None)  # set by a recurrent rollout: padded trajectories
         obs = batch.observations if masks is None else unpad_trajectories(batch.observations, masks)
         with torch.no_grad():
-            self.teacher(obs, stochastic_output=True)  # sets its distribution
-            teacher_std = self.teacher.output_distribution_params[1]
             labels = self.teacher(obs)  # its mean (a WorldLabeller's: corrections as distill.correction_margin
-            # clips them), then any labels beyond its distribution
+            k = self.teacher.distribution.output_dim  # clips them), then any labels beyond its distribution
+            self.teacher.distribution.update(labels[..., :k])  # its Gaussian about those labels
+            teacher = self.teacher.output_distribution_params
         mean, std = actor.output_distribution_params
-        k = teacher_std.shape[-1]
-        kl = actor.get_kl_divergence((labels[..., :k], teacher_std), (mean[..., :k], std[..., :k])).mean()
+        kl = actor.get_kl_divergence(teacher, (mean[..., :k], std[..., :k])).mean()
         loss = self.weight * kl
         self._sums["teacher_kl"] += float(kl.detach())
         if mean.shape[-1] > k:  # the game it estimates, labelled by the truth
