@@ -292,3 +292,57 @@ def test_approach_offset_aims_vel_to_ball_behind_the_ball():
     assert vel_to_ball(0.3, 0.2, at=(0.6, -0.4)) == pytest.approx(expected, abs=1e-5)
     with pytest.raises(ValueError, match="approach_offset"):
         make("soccer-1v1", rewards=SoccerRewards(approach_offset=-0.1))
+
+
+def test_estimate_noise_is_stationary_and_shaped_like_a_tracked_estimate():
+    from legged.soccer.estimate_noise import EstimateNoise, blurred, error_size, first_error, next_error
+
+    noise = EstimateNoise(enabled=True, correlation_s=0.5)
+    start = first_error(jax.random.PRNGKey(0), 20000, 1)
+    error, key = start, jax.random.PRNGKey(1)
+    for _ in range(20):  # 0.5 s: the correlation falls to 1/e
+        key, k = jax.random.split(key)
+        error = next_error(noise, error, k, 0.025)
+    assert error.shape == (20000, error_size(1)) == (20000, 11)
+    np.testing.assert_allclose(np.asarray(error).std(0), 1.0, atol=0.03)
+    correlation = [np.corrcoef(np.asarray(start)[:, i], np.asarray(error)[:, i])[0, 1] for i in range(11)]
+    np.testing.assert_allclose(correlation, np.exp(-1.0), atol=0.03)
+    # ball 0.3 m ahead, still; goals 2 m behind and 3 m ahead; the opponent 2 m to the left, walking
+    game = jnp.asarray([[0.3, 0.0, -0.17, 0.0, 0.0, 0.0, -2.0, 0.0, 3.0, 0.0, 0.0, 2.0, 0.1, 0.0]])
+    out = np.asarray(blurred(noise, error[:, None].reshape(20000, 11), jnp.broadcast_to(game, (20000, 14))))
+    diff = out - np.asarray(game)
+    assert np.all(diff[:, [2, 5]] == 0)  # the ball's height and vertical velocity stay exact
+    np.testing.assert_allclose(diff[:, 0:2].std(0), noise.ball + 0.3 * noise.ball_per_m, rtol=0.05)
+    np.testing.assert_allclose(diff[:, 3:5].std(0), noise.ball_vel, rtol=0.05)
+    np.testing.assert_allclose(diff[:, 10:12].std(0), noise.players + 2.0 * noise.players_per_m, rtol=0.05)
+    np.testing.assert_allclose(diff[:, 12:].std(0), noise.player_vel, rtol=0.05)
+    # the goals move together: one pose error (their separation keeps its length), the far one more across
+    np.testing.assert_allclose(np.linalg.norm(out[:, 8:10] - out[:, 6:8], axis=-1), 5.0, rtol=1e-5)
+    assert diff[:, 9].std() > diff[:, 7].std() > noise.pose_xy
+    np.testing.assert_allclose(diff[:, 8].std(), noise.pose_xy, rtol=0.1)
+
+
+def test_estimate_noise_blurs_only_the_deployable_game_features():
+    from legged.soccer.env import SoccerEnv
+    from legged.soccer.estimate_noise import EstimateNoise, blurred
+    from legged.soccer.task_config import SoccerConfig
+
+    with pytest.raises(ValueError, match="estimate_noise .* vision player"):
+        SoccerConfig(vision=True, estimate_noise=EstimateNoise(enabled=True))
+    with pytest.raises(ValueError, match="correlation_s positive"):
+        SoccerConfig(estimate_noise=EstimateNoise(correlation_s=0.0))
+    env = SoccerEnv(SoccerConfig(estimate_noise=EstimateNoise(enabled=True)))
+    clean_env = SoccerEnv(SoccerConfig())
+    keys = jax.random.split(jax.random.PRNGKey(3), 2)
+    state, clean = jax.vmap(env.reset)(keys), jax.vmap(clean_env.reset)(keys)
+    for _ in range(3):
+        zeros = jnp.zeros((2, env.n_agents, env.action_size))
+        state, clean = jax.vmap(env.step)(state, zeros), jax.vmap(clean_env.step)(clean, zeros)
+    size = env.policy_state_size
+    np.testing.assert_allclose(state.obs["privileged_state"], clean.obs["privileged_state"], atol=1e-6)  # same game
+    noisy, truth = state.obs["state"], state.obs["privileged_state"][..., :size]
+    p = observe.PROPRIO_SIZE
+    np.testing.assert_allclose(noisy[..., :p], truth[..., :p], atol=1e-6)
+    blur = blurred(env.config.estimate_noise, state.info["estimate_error"].reshape(4, -1), truth[..., p:].reshape(4, -1))
+    np.testing.assert_allclose(noisy[..., p:].reshape(4, -1), blur, atol=1e-5)
+    assert float(jnp.abs(noisy[..., p:p + 2] - truth[..., p:p + 2]).min()) > 0  # every player, every game blurred

@@ -32,6 +32,7 @@ from legged.sensors.raycam import render
 from legged.soccer import observe, randomize, rules
 from legged.soccer.sightings import (BALL_MIN_SHADE, NET_MIN_SHADE, SIGHTED, SIGHTING_SIZE, camera_agents, pixel_points,
                                      sighting)
+from legged.soccer.estimate_noise import blurred, first_error, next_error
 from legged.soccer.layout import SoccerLayout
 from legged.soccer.pitch import goal_centres, kickoff_poses
 from legged.soccer.placo_player import initial_memory
@@ -75,6 +76,8 @@ class SoccerEnv(MjxEnv):
         rng, k_start = jax.random.split(rng)
         qpos, qvel = self.start_state(k_start)
         info = self._initial_info(rng)
+        if self.config.estimate_noise.enabled:
+            info["estimate_error"] = first_error(jax.random.fold_in(rng, 11), self.n_agents, self.n_agents - 1)
         info["dr"] = randomize.sample(k_dr, self.config.randomization, self.mj_model, self.config.scene.ball_mass)
         return Spawn(qpos=qpos, qvel=qvel, ctrl=self._ctrl0, info=info)
 
@@ -138,6 +141,9 @@ class SoccerEnv(MjxEnv):
         info = dict(state.info)
         info["rng"], k_noise = jax.random.split(info["rng"])
         info["step"] = info["step"] + 1
+        if c.estimate_noise.enabled:
+            info["estimate_error"] = next_error(c.estimate_noise, info["estimate_error"],
+                                                jax.random.fold_in(k_noise, 11), self.dt)
 
         b = observe.read_bodies(self.layout, data.qpos, data.qvel)
         call = rules.call_ball(c.scene, b.ball_pos)
@@ -200,6 +206,8 @@ class SoccerEnv(MjxEnv):
         game = observe.game_features(b, self._team, self._goals, self._others)
         clean = jnp.concatenate([proprio, game], -1)
         state = proprio if c.vision else clean
+        if c.estimate_noise.enabled:  # the deployable state only: critics and frozen opponents read the truth
+            state = jnp.concatenate([proprio, blurred(c.estimate_noise, info["estimate_error"], game)], -1)
         if c.vision_heading:
             state = jnp.concatenate([proprio, observe.attack_direction(b, self._team, self._goals)], -1)
         if c.noise.enabled:

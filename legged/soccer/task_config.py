@@ -9,6 +9,7 @@ from legged.envs.config import EnvConfig, PenaltyScales
 from legged.robots.op3 import OP3_CTRL_DT
 from legged.sensors.raycam import RayCameraConfig
 from legged.soccer.config import SoccerSceneConfig
+from legged.soccer.estimate_noise import EstimateNoise
 from legged.soccer.randomize import SoccerRandomization
 
 
@@ -96,6 +97,9 @@ class SoccerConfig(EnvConfig):
     """With `vision`, for a player that estimates the game (command_prior=placo): its head pans toward where it
     estimates the ball to be (legged.soccer.opponents.ball_pan), keeping the ball in view; false: the walker
     holds the head."""
+    estimate_noise: EstimateNoise = EstimateNoise()
+    """State tasks: errors like a vision player's estimate on the game features of `state` (a state player that
+    steers a vision player from its estimate, `legged eval VISION_RUN --pilot RUN`; legged.soccer.estimate_noise)."""
     rewards: SoccerRewards = SoccerRewards()
     """Reward weights."""
     randomization: SoccerRandomization = SoccerRandomization()
@@ -103,6 +107,10 @@ class SoccerConfig(EnvConfig):
 
     def __post_init__(self):
         self.randomization.validate()
+        self.estimate_noise.validate()
+        if self.estimate_noise.enabled and self.vision:
+            raise ValueError("estimate_noise blurs a state player's game features; a vision player has none (it "
+                             "estimates them itself): switch one off")
         if self.rewards.approach_offset < 0:
             raise ValueError(f"rewards.approach_offset must be non-negative, got {self.rewards.approach_offset}")
         if self.end_on_fall not in ("agent0", "any", "never"):
