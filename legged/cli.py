@@ -46,7 +46,7 @@ def cmd_eval(args) -> int:
 
     from legged.tasks import task_entry
     from policies.evaluate import (HELD_OUT_SEED_OFFSET, confined_eval_config, evaluate, held_out, latent_probe,
-                                   ood_config, soccer_opponent, summarize)
+                                   ood_config, summarize)
     from policies.policy_io import load_policy
     from policies.run_dir import check_compatible
     from policies.training import build_env
@@ -71,11 +71,17 @@ def cmd_eval(args) -> int:
         raise ValueError(f"--compare-teacher plays a distilled soccer student's teacher in the same games; "
                          f"{args.run_dir} is not a soccer student distilled from a teacher (task {config.task}"
                          f"{', drill ' + config.drill if config.drill else ''})")
+    if args.compare_pilot and (not soccer or config.drill or not (args.pilot or config.pilot) or args.pilot == "none"):
+        raise ValueError(f"--compare-pilot plays a piloted vision student's pilot, at the truth, in the same games; "
+                         f"{args.run_dir} has no pilot (give one with --pilot RUN)")
     if config.drill and (args.opponent or args.teammate):
         raise ValueError(f"{args.run_dir} trained on the {config.drill} drill, where nobody else plays: its eval "
                          f"plays the drill, without --opponent or --teammate (or use `legged drill {config.drill} "
                          f"--player {args.run_dir}`)")
     policy, config = load_policy(args.run_dir, args.checkpoint)
+    if args.pilot:  # replaces the run's own pilot (none: the student's own corrections)
+        pilot = {"teacher": config.distill.teacher, "none": ""}.get(args.pilot, args.pilot)
+        config = dataclasses.replace(config, pilot=pilot).resolved()
     report = dict(physics=args.physics, seed=args.seed, checkpoint=str(policy.checkpoint), trained_steps=policy.step,
                   task=config.task)
     if args.ood:
@@ -90,10 +96,8 @@ def cmd_eval(args) -> int:
             report["tracker"] = True
         env = build_env(dataclasses.replace(config, env=ood_config(env_config) if args.ood else env_config))
         check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
-        if args.pilot:
-            pilot = config.distill.teacher if args.pilot == "teacher" else args.pilot
-            env.steer_with(soccer_opponent(pilot, env))
-            report["pilot"] = pilot
+        if config.pilot:
+            report["pilot"] = config.pilot
         samples = []
         if config.drill:
             report["drill"] = config.drill
@@ -108,7 +112,9 @@ def cmd_eval(args) -> int:
         if samples and hasattr(env, "observation_layout"):
             report["latent_probe_r2"] = latent_probe(samples, env.observation_layout())
         if args.compare_teacher:
-            report.update(_teacher_in_the_same_games(args, config.distill.teacher, finals))
+            report.update(_in_the_same_games(args, config.distill.teacher, finals, "teacher"))
+        if args.compare_pilot:
+            report.update(_in_the_same_games(args, config.pilot, finals, "pilot"))
     else:  # a fixed set of held-out worlds per difficulty, one episode each, every episode to its end
         report["world_seed"] = args.world_seed if args.world_seed is not None else \
             config.env.world_seed + HELD_OUT_SEED_OFFSET
@@ -137,25 +143,23 @@ def _other_players(args, env, policy) -> tuple:
     return others
 
 
-def _teacher_in_the_same_games(args, teacher_run: str, finals: list[dict]) -> dict:
-    """`legged eval --compare-teacher`: the student's distillation teacher played in the games the student
-    played (the same seed and batches start the same games), and the student's goals over the teacher's."""
-    import dataclasses
-
-    from policies.evaluate import evaluate, held_out, paired_goal_ratio, summarize
+def _in_the_same_games(args, state_run: str, finals: list[dict], role: str) -> dict:
+    """`legged eval --compare-teacher` (or `--compare-pilot`): the student's distillation teacher (or its pilot)
+    played at the truth in the games the student played (the same seed and batches start the same games), and
+    the student's goals over the state player's, as `role` and `goals_vs_<role>`."""
+    from policies.evaluate import evaluate, paired_goal_ratio, state_player_game, summarize
     from policies.policy_io import load_policy
-    from policies.training import build_env
 
-    teacher, config = load_policy(teacher_run)
-    env = build_env(dataclasses.replace(config, env=held_out(config.task, config.env)))
-    teacher_finals = evaluate(env, teacher, args.episodes, args.seed, args.physics, args.num_envs or 16,
-                              args.threads or None, progress=not args.quiet,
-                              env_args=_other_players(args, env, teacher))
-    summary = summarize(teacher_finals, False)
+    player, config = load_policy(state_run)
+    env = state_player_game(config)
+    player_finals = evaluate(env, player, args.episodes, args.seed, args.physics, args.num_envs or 16,
+                             args.threads or None, progress=not args.quiet,
+                             env_args=_other_players(args, env, player))
+    summary = summarize(player_finals, False)
     keep = ("goals_for_per_episode", "goals_against_per_episode", "win_rate", "fall_rate")
-    return {"teacher": dict({k: summary[k] for k in keep}, run=teacher_run, checkpoint=str(teacher.checkpoint)),
-            "goals_vs_teacher": paired_goal_ratio([f["goals_for"] for f in finals],
-                                                  [f["goals_for"] for f in teacher_finals])}
+    return {role: dict({k: summary[k] for k in keep}, run=state_run, checkpoint=str(player.checkpoint)),
+            f"goals_vs_{role}": paired_goal_ratio([f["goals_for"] for f in finals],
+                                                 [f["goals_for"] for f in player_finals])}
 
 
 def cmd_plot(args) -> int:
@@ -174,13 +178,19 @@ def cmd_table(args) -> int:
 
 
 def cmd_export(args) -> int:
+    from pathlib import Path
+
     from policies.export import export_onnx
     from policies.policy_io import load_policy
 
     if not args.onnx:
         raise ValueError("choose a format: --onnx")
-    policy, _ = load_policy(args.run_dir, args.checkpoint)
-    report = export_onnx(policy, args.out or f"{args.run_dir}/policy.onnx")
+    policy, config = load_policy(args.run_dir, args.checkpoint)
+    out = Path(args.out or f"{args.run_dir}/policy.onnx")
+    report = export_onnx(policy, out)
+    if config.pilot:  # a piloted vision student deploys as two networks: it estimates, the pilot steers
+        pilot, _ = load_policy(config.pilot)
+        report["pilot"] = dict(export_onnx(pilot, out.with_name(f"{out.stem}_pilot.onnx")), run=config.pilot)
     print(json.dumps(report))
     return 0
 
@@ -325,15 +335,19 @@ def build_parser() -> argparse.ArgumentParser:
                          "0.7-0.8, pushes 1.5x stronger (Go1 tasks)")
     ev.add_argument("--oracle", type=lambda v: [p for p in v.split(",") if p], default=[], metavar="ball,own_goal,...",
                     help="diagnostics: a vision player that estimates the game steers by the truth for these parts")
-    ev.add_argument("--pilot", default=None, metavar="teacher|RUN",
+    ev.add_argument("--pilot", default=None, metavar="teacher|RUN|none",
                     help="a vision player that estimates the game is steered by a state player (its distillation "
-                         "teacher, or a soccer run) from its estimate")
+                         "teacher, or a soccer run) from its estimate; none: by its own corrections (default: the "
+                         "run's config.pilot)")
     ev.add_argument("--tracker", action="store_true",
                     help="a vision player that estimates the game steers by its tracker's goals and ball where it "
                          "knows them (env.vision_tracker, legged.soccer.tracker)")
     ev.add_argument("--compare-teacher", action="store_true",
                     help="a distilled soccer student: also play its teacher in the same games and report the "
                          "student's goals over the teacher's, with a 95%% bootstrap interval over the games")
+    ev.add_argument("--compare-pilot", action="store_true",
+                    help="a piloted vision student: also play its pilot at the truth in the same games and report "
+                         "the student's goals over the pilot's (as --compare-teacher)")
     ev.add_argument("--json", action="store_true", help="one-line JSON")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
     ev.set_defaults(fn=cmd_eval)

@@ -215,6 +215,10 @@ class TrainConfig:
     """Soccer tasks with a walker: how a fallen robot gets up, `script` (ROBOTIS' scripted get-up) or the run
     directory of an op3-getup policy (needs env.end_on_fall=never, so that a fall does not end the game, and
     env.scene.limb_floor_contacts=true, as in its training). '' : fallen robots stay down."""
+    pilot: str = ""
+    """Vision students that estimate the game (command_prior=placo): run directory of a state soccer player whose
+    corrections, at the student's estimate, steer it instead of its own (LearnerView.steer_with); eval, view,
+    drill and export load it with the student. Not for training. '' : the student's own corrections."""
 
     @property
     def estimates_world(self) -> bool:
@@ -296,6 +300,14 @@ class TrainConfig:
             raise ConfigError("getup (script or an op3-getup run that stands fallen players up) needs "
                               "walker=OP3_WALK_RUN, env.end_on_fall=never (else a fall ends the game before anyone gets up) and "
                               "env.scene.limb_floor_contacts=true (the skill pushes up with its arms and legs)")
+        if cfg.pilot and not cfg.estimates_world:
+            raise ConfigError(f"pilot (a state soccer run steering a vision student from its estimate of the game) "
+                              f"needs a vision student that estimates the game (a soccer vision task, a walker, "
+                              f"command_prior=placo); this run is {cfg.task} with command_prior "
+                              f"{cfg.command_prior!r}")
+        if cfg.pilot in ("placo", "scripted", "self", "teacher", "none"):
+            raise ConfigError(f"pilot={cfg.pilot}: a pilot is the run directory of a state soccer player trained "
+                              f"with command_prior=placo")
         if cfg.num_envs * cfg.ppo.num_steps_per_env % cfg.ppo.num_mini_batches:
             raise ConfigError(f"num_envs x num_steps_per_env ({cfg.num_envs} x {cfg.ppo.num_steps_per_env}) must "
                               f"divide into num_mini_batches ({cfg.ppo.num_mini_batches})")

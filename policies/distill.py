@@ -330,6 +330,9 @@ def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps:
     if method == "rma":  # the student acts with the teacher's head: same sizes
         changes["latent"] = dataclasses.replace(teacher.latent)
     config = apply_overrides(dataclasses.replace(teacher, **changes).resolved(), list(overrides))
+    from policies.training import build_env, refuse_pilot
+
+    refuse_pilot(config)
     if config.estimates_world and not teacher.command_prior:  # it adds the placo command itself, from its estimate
         raise ConfigError(f"command_prior=placo: the student adds the placo command to corrections it learns "
                           f"from a teacher that corrected that command; teacher {teacher_run} did not "
@@ -345,6 +348,5 @@ def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps:
     if progress:
         print(f"[distill] {method} from {teacher_run} into {run.path}", flush=True)
     from policies.rsl_backend import train_rsl
-    from policies.training import build_env
 
     return train_rsl(build_env(config), config, run, resume=False, progress=progress)

@@ -10,7 +10,7 @@ import numpy as np
 from legged.soccer.drills import DrillConfig, DrillEnv
 from legged.soccer.skill_config import GetUpConfig
 from legged.soccer.task_config import SoccerConfig
-from policies.evaluate import estimate_errors, evaluate
+from policies.evaluate import estimate_errors, evaluate, steer_with_pilot
 from policies.policy_io import GETUP_SCRIPT as SCRIPT  # `--player script`: the get-up script open loop
 
 SKILL_DRILLS = {"op3-walk": "walk", "op3-getup": "getup"}
@@ -110,8 +110,11 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
 
         walker = load_walker(run.walker, run.getup, run.command_prior)
     game = SoccerConfig() if run is None else players_view(run.env)
-    return DrillEnv(drill, with_randomization(game), placo=player == "placo", walker=walker,
-                    teacher_prior=run is not None and run.game_gives_placo_command)  # a vision student's observations
+    env = DrillEnv(drill, with_randomization(game), placo=player == "placo", walker=walker,
+                   teacher_prior=run is not None and run.game_gives_placo_command)  # a vision student's observations
+    if run is not None and run.pilot:  # a vision student steered by a state player from its estimate
+        steer_with_pilot(env, run.pilot)
+    return env
 
 
 def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "native", threads: int | None = None,
@@ -133,6 +136,8 @@ def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "
               "episode_seconds": float(np.mean([f["time_s"] for f in finals]))}
     if errors:
         report["estimate_rms_m"] = errors
+    if getattr(env, "state_pilot", None) is not None:
+        report["pilot"] = env.pilot_name
     if name == "walk":
         walk = ("speed_mps", "tracking_error_mps", "smoothed_tracking_error_mps", "smoothed_yaw_rate_error_radps")
         report.update({k: float(np.mean([f[k] for f in finals])) for k in walk})

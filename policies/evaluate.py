@@ -128,10 +128,27 @@ def one_tile_each(first: int, count: int, tiles: int) -> dict:
     return level_carry(np.zeros(count), np.arange(first, first + count) % tiles)
 
 
-def soccer_opponent(spec: str, env, policy=None):
-    """The `Opponent` that `--opponent` (or `--teammate`) names for a soccer learner's view `env`: `placo`
-    (walks and kicks), `scripted` (stands, head on the ball), `self` (the evaluated `policy`) or a soccer run
-    directory (its deterministic actor)."""
+def state_player_game(config):
+    """The held-out game of the state soccer run with `config`, its features true (a pilot trained on estimate
+    errors plays without them): what a student is compared with in the same games."""
+    from policies.training import build_env
+
+    env = held_out(config.task, config.env)
+    if getattr(env, "estimate_noise", None) is not None:
+        env = dataclasses.replace(env, estimate_noise=dataclasses.replace(env.estimate_noise, enabled=False))
+    return build_env(dataclasses.replace(config, env=env))
+
+
+def steer_with_pilot(env, pilot: str) -> None:
+    """Let the state soccer run `pilot` steer the vision student's view `env` from its estimate of the game
+    (TrainConfig.pilot); ValueError naming the run if it cannot."""
+    env.steer_with(soccer_opponent(pilot, env, role="pilot"), pilot)
+
+
+def soccer_opponent(spec: str, env, policy=None, role: str = "--opponent"):
+    """The `Opponent` that `--opponent` (or `--teammate`, or a vision student's pilot: `role`, for errors) names
+    for a soccer learner's view `env`: `placo` (walks and kicks), `scripted` (stands, head on the ball), `self`
+    (the evaluated `policy`) or a soccer run directory (its deterministic actor)."""
     from legged.soccer.opponents import placo_opponent, scripted_opponent
     from policies.selfplay import snapshot_rsl_actor
 
@@ -148,19 +165,19 @@ def soccer_opponent(spec: str, env, policy=None):
 
     config = RunDir(spec).load_config()  # RunDirError naming the path if it is not a run
     if task_entry(config.task).kind != "soccer" or config.backend != "rsl" or config.algo != "ppo":
-        raise ValueError(f"--opponent {spec}: a soccer opponent is placo, scripted or an rsl-rl soccer run; this "
+        raise ValueError(f"{role} {spec}: a soccer opponent is placo, scripted or an rsl-rl soccer run; this "
                          f"run trained {config.task} with {config.backend}/{config.algo}")
     if bool(config.walker) != (env.walker is not None):
         mine = "commands a walker" if env.walker is not None else "drives its joints"
-        raise ValueError(f"--opponent {spec}: the learner {mine}, the opponent run "
+        raise ValueError(f"{role} {spec}: the learner {mine}, the opponent run "
                          f"{'commands a walker' if config.walker else 'drives its joints'}: both must do the same")
     if bool(config.command_prior) != (env.walker is not None and env.walker.prior is not None):
-        raise ValueError(f"--opponent {spec}: its commands are{'' if config.command_prior else ' not'} corrections "
+        raise ValueError(f"{role} {spec}: its commands are{'' if config.command_prior else ' not'} corrections "
                          "to the placo player's (command_prior), the learner's are"
                          f"{' not' if config.command_prior else ''}: both must do the same")
     policy, _ = load_policy(spec)
     if policy.inputs != ("state",) or policy.obs_sizes["state"] != size:
-        raise ValueError(f"--opponent {spec}: its actor reads {policy.obs_sizes['state']} state features; the "
+        raise ValueError(f"{role} {spec}: its actor reads {policy.obs_sizes['state']} state features; the "
                          f"opponents of this game read {size} (same team size, a state task)")
     return snapshot_rsl_actor(policy.torch_module)
 

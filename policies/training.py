@@ -32,8 +32,21 @@ def build_env(config: TrainConfig, progress: bool = True):
         env = make_planned_env(config.task, config=config.env, progress=progress)
     else:
         env = make(config.task, config.env)
-    return learner_env(entry, env, config.ppo.activation, config.ppo.actor_hidden, walker,
-                       config.game_gives_placo_command)
+    env = learner_env(entry, env, config.ppo.activation, config.ppo.actor_hidden, walker,
+                      config.game_gives_placo_command)
+    if config.pilot:
+        from policies.evaluate import steer_with_pilot
+
+        steer_with_pilot(env, config.pilot)
+    return env
+
+
+def refuse_pilot(config: TrainConfig) -> None:
+    """ConfigError if `config` names a pilot: a piloted vision student is played (eval, view, drill, export), not
+    trained."""
+    if config.pilot:
+        raise ConfigError(f"pilot={config.pilot}: a state pilot steers a trained vision student in eval, view, drill "
+                          f"and export; train or distill the student without it (--set pilot=)")
 
 
 def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> dict:
@@ -71,6 +84,7 @@ def start_run(task: str, run_dir: str | None, backend: str = "rsl", num_envs: in
     config = TrainConfig(task=task, backend=backend, num_envs=num_envs, timesteps=timesteps, seed=seed,
                          physics=physics, threads=threads, init_from=init_from, algo=algo).resolved()
     config = apply_overrides(config, list(overrides))
+    refuse_pilot(config)
     if config.init_from and not (Path(config.init_from) / "config.yaml").is_file():  # only when starting
         raise ConfigError(f"init_from: {config.init_from} is not a run directory (no config.yaml)")
     main = _prepare(config)
@@ -91,6 +105,7 @@ def resume_run(run_dir: str, progress: bool = True) -> dict:
     """Continue a run from its last checkpoint with its own config, appending to its metrics."""
     run = RunDir(run_dir)
     config = run.load_config()
+    refuse_pilot(config)
     run.latest_checkpoint()  # fail now if there is nothing to resume from
     run.clean_stale()
     _prepare(config)

@@ -49,6 +49,8 @@ def files(tmp_path_factory):
 
 
 FOLLOWER = str(Path(__file__).resolve().parents[1] / "assets" / "policies" / "go1-confined-follower")
+PILOTED = str(Path(__file__).resolve().parents[1] / "assets" / "policies" / "op3-soccer-1v1-vision-piloted")
+"""A vision student steered by a state pilot (TrainConfig.pilot)."""
 """The shipped waypoint follower (navigate's bad-input cases need a policy that can navigate)."""
 
 
@@ -129,6 +131,14 @@ CASES = {
     "eval: difficulty of a flat task": (["eval", "{d}/run", "--difficulty", "1"], "apply to confined tasks"),
     "eval: negative difficulty": (["eval", "{d}/run", "--difficulty", "-1"], "from 0 to 20"),
     "eval: pilot of a flat task": (["eval", "{d}/run", "--pilot", "teacher"], "apply to soccer vision students"),
+    "eval: compare with no pilot": (["eval", "{d}/run", "--compare-pilot"], "has no pilot"),
+    "eval: placo as a pilot": (["eval", PILOTED, "--pilot", "placo"], "a pilot is the run directory"),
+    "train: pilot of a state player": (["train", "soccer-1v1", "--set", "pilot=" + PILOTED, "--run-dir", "{d}/t9"],
+                                       "needs a vision student that estimates the game"),
+    "train: resume a piloted player": (["train", "--resume", PILOTED], "train or distill the student without it"),
+    "distill: with a pilot": (["distill", PILOTED.replace("-vision-piloted", ""), "--task", "soccer-1v1-vision",
+                               "--method", "dagger", "--set", "command_prior=placo", "--set", "pilot=" + PILOTED,
+                               "--run-dir", "{d}/t10"], "train or distill the student without it"),
     "eval: oracle of a flat task": (["eval", "{d}/run", "--oracle", "ball"], "apply to soccer vision students"),
     "eval: tracker of a flat task": (["eval", "{d}/run", "--tracker"], "apply to soccer vision students"),
     "eval: teacher of a flat task": (["eval", "{d}/run", "--compare-teacher"], "not a soccer student distilled"),
@@ -163,7 +173,7 @@ def test_bad_input_is_one_line_and_exit_2(name, files, capsys):
 
 
 def test_nothing_half_written(files):
-    for name in ("t1", "t2", "t3", "t4", "t5", "t6", "t7", "t8", "w"):
+    for name in ("t1", "t2", "t3", "t4", "t5", "t6", "t7", "t8", "t9", "t10", "w"):
         assert not (files / name).exists(), name
     assert not (files / "p.onnx").exists()
 

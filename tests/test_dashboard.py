@@ -39,6 +39,8 @@ dashboard's start alone took over 3 minutes."""
 VISION_STUDENT = ROOT / "assets/runs/soccer-1v1-vision-tracker-cpu2"
 """A trained vision student that estimates the ball, goals and opponent from its camera and its camera's sightings of
 the ball and goals, and steers by its tracker (issue 18's evidence run)."""
+PILOTED_STUDENT = ROOT / "assets/policies/op3-soccer-1v1-vision-piloted"
+"""The same network, shipped steered from its estimate by a state pilot (its config's `pilot`)."""
 
 
 def free_port() -> int:
@@ -323,13 +325,13 @@ def test_dashboard_in_headless_chromium(recorded, tmp_path):
 
 @pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (CI installs it: .ci/install)")
 def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
-    """A vision student's rollout (a trained one that estimates the game and has a tracker) in a game shows its
-    head camera in the Camera tab, and its estimate of the ball, goals and opponent, what its camera sights and
-    where its tracker puts it as overlays. (The recording of the same is checked without a browser below; one
-    browser session costs minutes.)"""
+    """A vision student's rollout (a trained one that estimates the game, has a tracker and is steered by a state
+    pilot) in a game names its pilot, shows its head camera in the Camera tab, and its estimate of the ball, goals
+    and opponent, what its camera sights and where its tracker puts it as overlays. (The recording of the same is
+    checked without a browser below; one browser session costs minutes.)"""
     playwright = pytest.importorskip("playwright.sync_api", reason="playwright is a dev dependency")
     port = free_port()
-    command = [sys.executable, "-m", "legged.cli", "view", str(VISION_STUDENT), "--physics", "native",
+    command = [sys.executable, "-m", "legged.cli", "view", str(PILOTED_STUDENT), "--physics", "native",
                "--steps", "10", "--port", str(port)]
     proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             env={**os.environ, "PYTHONUNBUFFERED": "1"})
@@ -341,6 +343,8 @@ def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
             page = browser.new_page(viewport={"width": 1024, "height": 700})
             page.goto(f"http://127.0.0.1:{port}")
             page.locator("canvas[data-engine]").wait_for(timeout=WAIT_S * 1000)
+            page.get_by_text("steered from its estimate by assets/policies/op3-soccer-1v1-pilot").first.wait_for(
+                timeout=WAIT_S * 1000)
             page.get_by_role("tab", name="Camera").click()
             page.get_by_text("camera observation recorded by the task").first.wait_for(timeout=WAIT_S * 1000)
             image = page.locator("img").last

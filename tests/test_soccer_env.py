@@ -322,7 +322,7 @@ def test_estimate_noise_is_stationary_and_shaped_like_a_tracked_estimate():
     np.testing.assert_allclose(diff[:, 8].std(), noise.pose_xy, rtol=0.1)
 
 
-def test_estimate_noise_blurs_only_the_deployable_game_features():
+def test_estimate_noise_blurs_only_the_deployable_game_features(game):
     from legged.soccer.env import SoccerEnv
     from legged.soccer.estimate_noise import EstimateNoise, blurred
     from legged.soccer.task_config import SoccerConfig
@@ -332,12 +332,12 @@ def test_estimate_noise_blurs_only_the_deployable_game_features():
     with pytest.raises(ValueError, match="correlation_s positive"):
         SoccerConfig(estimate_noise=EstimateNoise(correlation_s=0.0))
     env = SoccerEnv(SoccerConfig(estimate_noise=EstimateNoise(enabled=True)))
-    clean_env = SoccerEnv(SoccerConfig())
     keys = jax.random.split(jax.random.PRNGKey(3), 2)
-    state, clean = jax.vmap(env.reset)(keys), jax.vmap(clean_env.reset)(keys)
-    for _ in range(3):
+    step = jax.jit(jax.vmap(env.step))  # the clean game: the module's soccer-1v1 (SoccerConfig's defaults)
+    state, clean = jax.jit(jax.vmap(env.reset))(keys), game.reset(keys)
+    for _ in range(2):
         zeros = jnp.zeros((2, env.n_agents, env.action_size))
-        state, clean = jax.vmap(env.step)(state, zeros), jax.vmap(clean_env.step)(clean, zeros)
+        state, clean = step(state, zeros), game.step(clean, zeros)
     size = env.policy_state_size
     np.testing.assert_allclose(state.obs["privileged_state"], clean.obs["privileged_state"], atol=1e-6)  # same game
     noisy, truth = state.obs["state"], state.obs["privileged_state"][..., :size]

@@ -88,8 +88,9 @@ def test_its_features_are_the_games_for_its_pose_and_the_ball_is_kept_then_forgo
     truth = np.array([0.4, -0.6, 2.0])
     tracker = tracker_kickoff(jnp.asarray(truth, jnp.float32))
     estimate = jnp.arange(14, dtype=jnp.float32)  # the player's own: ball (3), ball velocity (3), goals, opponent
-    features = lambda t: np.asarray(tracked_features(t, estimate, PARTS["ball"], PARTS["own_goal"],
-                                                     PARTS["opponent_goal"], OWN_XY, OPPONENT_XY))
+    features = lambda t, *memory_s: np.asarray(tracked_features(t, estimate, PARTS["ball"], PARTS["own_goal"],
+                                                                PARTS["opponent_goal"], OWN_XY, OPPONENT_XY,
+                                                                *memory_s))
     ego = lambda xy: np.asarray(yaw_rotate(jnp.float32(truth[2]), jnp.asarray(xy - truth[:2], jnp.float32)))
     unseen = features(tracker)
     np.testing.assert_allclose(unseen[6:8], ego(OWN_XY), atol=1e-5)  # as game_features: goal - torso, heading frame
@@ -107,6 +108,7 @@ def test_its_features_are_the_games_for_its_pose_and_the_ball_is_kept_then_forgo
     np.testing.assert_allclose(features(tracker)[:2], ego(ball), atol=1e-4)
     tracker = tracker_step(tracker, jnp.zeros(2), jnp.float32(0.0), jnp.bool_(False), 0.025)
     np.testing.assert_array_equal(features(tracker)[:2], np.asarray(estimate[:2]))  # ... then forgotten
+    np.testing.assert_allclose(features(tracker, 2 * BALL_MEMORY_S)[:2], ego(ball), atol=1e-4)  # unless kept longer
 
 
 def test_its_inputs_are_what_it_knows_and_zeros_elsewhere():
@@ -176,6 +178,8 @@ def test_a_tracker_needs_a_vision_player_that_estimates_the_game():
         make("soccer-1v1", vision_tracker=True)
     with pytest.raises(ValueError, match="vision_tracker_inputs .* needs vision_tracker"):
         make("soccer-1v1-vision", vision_tracker_inputs=True)
+    with pytest.raises(ValueError, match="vision_ball_memory_s must be > 0"):
+        make("soccer-1v1-vision", vision_tracker=True, vision_ball_memory_s=0.0)
     walker = dataclasses.replace(load_walker("assets/policies/op3-walker", prior="placo"), prior=None)
     with pytest.raises(ValueError, match="needs a player that estimates the game"):
         LearnerView(make("soccer-1v1-vision", vision_tracker=True), walker=walker)

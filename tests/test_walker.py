@@ -341,3 +341,35 @@ def test_what_a_vision_player_that_estimates_the_game_steers_by(estimating):
     with pytest.raises(ValueError, match="a state pilot steers"):
         LearnerView(make("soccer-1v1-vision"), walker=no_prior).steer_with(network_opponent(
             np.zeros(size), np.ones(size), [(np.zeros((size, 3)), np.zeros(3))]))
+
+
+def test_a_shipped_piloted_vision_player_brings_its_pilot_to_games_and_drills():
+    """A vision student whose config names a pilot (TrainConfig.pilot; assets/policies/op3-soccer-1v1-vision-piloted)
+    is steered by it wherever it plays: in games (build_env: eval, view) and in drills (drill_env). A run that is not
+    a state soccer player commanding the same walker is refused by name."""
+    from pathlib import Path
+
+    from legged.soccer.drills import DrillConfig
+    from policies.drill import drill_env
+    from policies.evaluate import state_player_game, steer_with_pilot
+    from policies.run_dir import RunDir
+    from policies.training import build_env
+
+    piloted = Path(__file__).resolve().parents[1] / "assets/policies/op3-soccer-1v1-vision-piloted"
+    config = RunDir(piloted).load_config()
+    assert config.pilot == "assets/policies/op3-soccer-1v1-pilot"
+    game = build_env(config, progress=False)
+    assert game.state_pilot is not None and game.pilot_name == config.pilot
+    assert game.state_pilot.mean.shape[-1] == PROPRIO_SIZE + game.world_size
+    drill = drill_env(str(piloted), DrillConfig(name="empty-goal"), randomize=False)
+    assert drill.state_pilot is not None and drill.pilot_name == config.pilot
+    with pytest.raises(ValueError, match="pilot assets/policies/op3-walker: a soccer opponent is"):
+        steer_with_pilot(game, "assets/policies/op3-walker")
+    # `legged eval --compare-pilot` (and --compare-teacher) count on the state player's game starting as the
+    # student's for the same reset key: the pilot, trained on estimate errors, plays them at the truth
+    truth = state_player_game(RunDir(config.pilot).load_config())
+    assert not truth.config.estimate_noise.enabled
+    key = jax.random.fold_in(jax.random.PRNGKey(34567), 0)
+    starts = [np.asarray(VectorEnv.of(env, 2, "native", 1).reset(key).state.obs["privileged_state"])
+              for env in (game, truth)]
+    np.testing.assert_array_equal(starts[0], starts[1])

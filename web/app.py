@@ -319,6 +319,7 @@ class Dashboard:
         if self.source is not None and traj.paths is not None:
             worlds = f", {self.source.env.terrain.num_tiles} world(s) in the terrain"
         against = f" against {info['opponent']}" if info.get("opponent") else ""
+        against += f", steered from its estimate by {info['pilot']}" if info.get("pilot") else ""
         self._set_status(f"**{info.get('task', '?')}** — {info.get('policy', 'recorded trajectory')}{against}, "
                          f"seed {info.get('seed', '?')}, {traj.num_envs} env(s), {traj.num_frames - 1} steps{worlds}")
 

@@ -113,6 +113,8 @@ class RolloutSource:
             info["run_dir"] = str(self.run_dir)
         if self.opponent_name is not None:
             info["opponent"] = self.opponent_name
+        if getattr(self.env, "state_pilot", None) is not None:  # a vision student steered from its estimate
+            info["pilot"] = self.env.pilot_name
         return self.recorder.record(steps, seed, act, info, progress)
 
 

@@ -110,8 +110,10 @@ class LearnerView(MjxEnv):
         self.state_pilot: Opponent | None = None
         """A state player's network (an Opponent) that steers a game-estimating vision player from its estimate
         (`steer_with`); None: the player's own corrections do."""
+        self.pilot_name = ""
+        """What `state_pilot` is (e.g. its run directory), for reports; '' without one."""
 
-    def steer_with(self, pilot: Opponent) -> None:
+    def steer_with(self, pilot: Opponent, name: str = "") -> None:
         """Let the state player `pilot` (a soccer-1v1 run whose commands correct the placo player's, as an
         Opponent) steer this vision player: its command is the pilot's at [proprioception, the player's
         estimate of the game], so the vision network only has to see (the player's own corrections are unused).
@@ -123,7 +125,7 @@ class LearnerView(MjxEnv):
         if pilot.mean.shape[-1] != width:
             raise ValueError(f"the pilot reads {pilot.mean.shape[-1]} features, this player's proprioception and "
                              f"estimate are {width}")
-        self.state_pilot = pilot
+        self.state_pilot, self.pilot_name = pilot, name or "a state player"
 
     def camera_images(self, data) -> jax.Array:
         """RGB image of the learner's head camera, [H, W, 3] uint8 (the ray renderer at the task's camera
@@ -209,7 +211,8 @@ class LearnerView(MjxEnv):
         if self.config.vision_tracker:
             parts = self._world_parts
             world = tracked_features(state.info["tracker"], world, parts["ball"], parts["own_goal"],
-                                     parts["opponent_goal"], self._goal_xy[0], self._goal_xy[1])
+                                     parts["opponent_goal"], self._goal_xy[0], self._goal_xy[1],
+                                     self.config.vision_ball_memory_s)
         if self.config.vision_sighted_ball:
             sighting = self._sightings(state.info)[0]  # the ball's: seen, then x, y, z
             ball = self.estimate_parts["ball"]
@@ -338,7 +341,8 @@ class LearnerView(MjxEnv):
         info = {**game.info, "game_obs": game.obs}
         obs = {k: v[LEARNER] for k, v in game.obs.items()}
         if self.config.vision_tracker_inputs:
-            inputs = tracker_inputs(game.info["tracker"], self._goal_xy[0], self._goal_xy[1])
+            inputs = tracker_inputs(game.info["tracker"], self._goal_xy[0], self._goal_xy[1],
+                                    self.config.vision_ball_memory_s)
             obs["state"] = jnp.concatenate([obs["state"], inputs])
         if self.teacher_prior:  # what the teacher's corrections were added to, from the state it reads
             obs["command_prior"] = self.walker.prior_actions(obs["features"][None], self.tables)[0]

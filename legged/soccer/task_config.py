@@ -85,6 +85,9 @@ class SoccerConfig(EnvConfig):
     """With `vision_tracker`: the learner's 'state' also ends with what its tracker knows (legged.soccer.tracker
     .tracker_inputs: locked on, both goals, ball fresh, the ball; heading frame, zeros where it knows nothing),
     so that its network's corrections can use it too."""
+    vision_ball_memory_s: float = 1.0
+    """With `vision_tracker`: how long the tracker keeps the ball where the camera last saw it (s); after that the
+    player's own estimate of the ball is used."""
     vision_sighted_ball: bool = False
     """With `vision_sightings`, for a player that estimates the game (command_prior=placo): the placo command
     takes the ball's position from the sighting whenever the camera sees the ball, from the player's own
@@ -124,6 +127,8 @@ class SoccerConfig(EnvConfig):
                              "player's state: it needs vision")
         if self.vision_tracker and not self.vision:
             raise ValueError("vision_tracker tracks a vision player's pose and the ball from its camera: it needs vision")
+        if not self.vision_ball_memory_s > 0:
+            raise ValueError(f"vision_ball_memory_s must be > 0 seconds, got {self.vision_ball_memory_s}")
         if self.vision_tracker_inputs and not self.vision_tracker:
             raise ValueError("vision_tracker_inputs gives a vision player's network what its tracker knows: it needs "
                              "vision_tracker")

@@ -13,7 +13,7 @@ that tracker, an extended Kalman filter over the torso's ground pose (x, y, yaw)
 - lock on: a game starts with the robot near its kick-off spot but turned anyhow (+-90 degrees), so the yaw is
   unknown until the opponent goal's net is first seen; its bearing then sets the yaw;
 - a kick-off after a goal puts the robot back on its kick-off spot and the ball on the centre spot: both known;
-- the ball: where the camera last saw it (world frame), forgotten after BALL_MEMORY_S unseen.
+- the ball: where the camera last saw it (world frame), forgotten after `memory_s` unseen (BALL_MEMORY_S).
 
 The state is one float vector (`TRACKER_SIZE`) per player, jittable and vmappable. `tracked_features` turns it
 into the heading-frame features the placo command reads (legged.soccer.observe.game_features: ball, own goal,
@@ -57,7 +57,8 @@ GATE = 25.0
 """A sighting whose squared Mahalanobis distance from the prediction exceeds this is ignored (once locked on)."""
 
 BALL_MEMORY_S = 1.0
-"""The ball is kept where it was last seen this long (seconds); after that the player's own estimate is used."""
+"""The ball is kept where it was last seen this long by default (seconds; SoccerConfig.vision_ball_memory_s); after
+that the player's own estimate is used."""
 
 
 def tracker_start(kickoff) -> jnp.ndarray:
@@ -108,11 +109,11 @@ def tracker_sight(tracker, sightings, net_centres, goal_width: float) -> jnp.nda
 
 
 def tracked_features(tracker, estimate, ball: slice, own_goal: slice, opponent_goal: slice, own_xy,
-                     opponent_xy) -> jnp.ndarray:
+                     opponent_xy, memory_s: float = BALL_MEMORY_S) -> jnp.ndarray:
     """The game features `estimate` (a player's own estimate, heading frame) with what the tracker knows put in:
     both goals' centres (`own_xy`, `opponent_xy`, world) once locked on, the ball's x, y if seen within
-    BALL_MEMORY_S."""
-    on, own, opponent, fresh, ball_ego = _known(tracker, own_xy, opponent_xy)
+    `memory_s` seconds."""
+    on, own, opponent, fresh, ball_ego = _known(tracker, own_xy, opponent_xy, memory_s)
     estimate = estimate.at[own_goal].set(jnp.where(on, own, estimate[own_goal]))
     estimate = estimate.at[opponent_goal].set(jnp.where(on, opponent, estimate[opponent_goal]))
     xy = slice(ball.start, ball.start + 2)
@@ -123,11 +124,11 @@ TRACKER_INPUT_SIZE = 8
 """Length of `tracker_inputs`."""
 
 
-def tracker_inputs(tracker, own_xy, opponent_xy) -> jnp.ndarray:
+def tracker_inputs(tracker, own_xy, opponent_xy, memory_s: float = BALL_MEMORY_S) -> jnp.ndarray:
     """What the tracker knows as a network's inputs [TRACKER_INPUT_SIZE], in the heading frame: locked on (0/1),
     the own and opponent goals' centres (`own_xy`, `opponent_xy`, world; zeros before it locks on), the ball
-    fresh (0/1: seen within BALL_MEMORY_S, once locked on) and its x, y (zeros unless fresh)."""
-    on, own, opponent, fresh, ball_ego = _known(tracker, own_xy, opponent_xy)
+    fresh (0/1: seen within `memory_s` seconds, once locked on) and its x, y (zeros unless fresh)."""
+    on, own, opponent, fresh, ball_ego = _known(tracker, own_xy, opponent_xy, memory_s)
     on, fresh = on.astype(jnp.float32), fresh.astype(jnp.float32)
     return jnp.concatenate([on[None], on * own, on * opponent, fresh[None], fresh * ball_ego])
 
@@ -138,13 +139,13 @@ def tracked_pose(tracker) -> tuple[jnp.ndarray, jnp.ndarray]:
     return pose, locked > 0.5
 
 
-def _known(tracker, own_xy, opponent_xy):
+def _known(tracker, own_xy, opponent_xy, memory_s: float):
     """(locked on, the own and opponent goals' centres in the heading frame, the ball fresh: seen within
-    BALL_MEMORY_S once locked on, the ball in the heading frame) of a tracker."""
+    `memory_s` seconds once locked on, the ball in the heading frame) of a tracker."""
     pose, _, locked, ball_xy, known, age = _unpack(tracker)
     ego = lambda xy: yaw_rotate(pose[2], jnp.asarray(xy, jnp.float32) - pose[:2])
     on = locked > 0.5
-    return on, ego(own_xy), ego(opponent_xy), on & (known > 0.5) & (age <= BALL_MEMORY_S), ego(ball_xy)
+    return on, ego(own_xy), ego(opponent_xy), on & (known > 0.5) & (age <= memory_s), ego(ball_xy)
 
 
 def _net_update(pose, cov, sight, centre, locked, across: float):
