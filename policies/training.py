@@ -24,17 +24,18 @@ def build_env(config: TrainConfig, progress: bool = True):
     if config.drill:  # one player on the pitch doing the drill, the other parked (no opponent to hand it)
         from legged.soccer.drills import DrillConfig, DrillEnv
 
-        return DrillEnv(DrillConfig(name=config.drill), config.env, walker=walker,
-                        teacher_prior=config.game_gives_placo_command)
-    if entry.kind == "confined":
-        from planners import make_planned_env
-
-        env = make_planned_env(config.task, config=config.env, progress=progress)
+        env = DrillEnv(DrillConfig(name=config.drill), config.env, walker=walker,
+                       teacher_prior=config.game_gives_placo_command)
     else:
-        env = make(config.task, config.env)
-    env = learner_env(entry, env, config.ppo.activation, config.ppo.actor_hidden, walker,
-                      config.game_gives_placo_command)
-    if config.pilot:
+        if entry.kind == "confined":
+            from planners import make_planned_env
+
+            game = make_planned_env(config.task, config=config.env, progress=progress)
+        else:
+            game = make(config.task, config.env)
+        env = learner_env(entry, game, config.ppo.activation, config.ppo.actor_hidden, walker,
+                          config.game_gives_placo_command)
+    if config.pilot:  # a game or a drill
         from policies.evaluate import steer_with_pilot
 
         steer_with_pilot(env, config.pilot)

@@ -363,6 +363,8 @@ def test_a_shipped_piloted_vision_player_brings_its_pilot_to_games_and_drills():
     assert game.state_pilot.mean.shape[-1] == PROPRIO_SIZE + game.world_size
     drill = drill_env(str(piloted), DrillConfig(name="empty-goal"), randomize=False)
     assert drill.state_pilot is not None and drill.pilot_name == config.pilot
+    trained_on_the_drill = build_env(dataclasses.replace(config, drill="empty-goal"), progress=False)  # its eval
+    assert trained_on_the_drill.state_pilot is not None
     with pytest.raises(ValueError, match="pilot assets/policies/op3-walker: a soccer opponent is"):
         steer_with_pilot(game, "assets/policies/op3-walker")
     # `legged eval --compare-pilot` (and --compare-teacher) count on the state player's game starting as the
