@@ -43,11 +43,13 @@ def build_env(config: TrainConfig, progress: bool = True):
 
 
 def refuse_pilot(config: TrainConfig) -> None:
-    """ConfigError if `config` names a pilot: a piloted vision student is played (eval, view, drill, export), not
-    trained."""
-    if config.pilot:
+    """ConfigError if `config` names a pilot and does not distil by DAgger: a piloted vision student is played
+    (eval, view, drill, export) and can learn its estimate by DAgger in the games its pilot steers (the labels
+    do not depend on who acts), but PPO and kl would learn corrections the pilot throws away."""
+    if config.pilot and config.algo != "dagger":
         raise ConfigError(f"pilot={config.pilot}: a state pilot steers a trained vision student in eval, view, drill "
-                          f"and export; train or distill the student without it (--set pilot=)")
+                          f"and export, and in DAgger (--method dagger); train or distil by {config.algo} without "
+                          f"it (--set pilot=)")
 
 
 def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> dict:

@@ -322,9 +322,47 @@ def test_estimate_noise_is_stationary_and_shaped_like_a_tracked_estimate():
     np.testing.assert_allclose(diff[:, 8].std(), noise.pose_xy, rtol=0.1)
 
 
+def test_estimate_noise_sight_gives_the_ball_seen_held_then_guessed():
+    """`estimate_noise.sight`: the ball exact-ish in the head camera's field, held where last seen for
+    `memory_s`, then guessed with a larger error; a restart forgets it."""
+    from legged.soccer.estimate_noise import (UNSEEN, EstimateNoise, blurred, first_sighting, held_ball, in_sight,
+                                              next_sighting)
+
+    noise = EstimateNoise(enabled=True, sight=True)
+    ahead = jnp.asarray([[1.0, 0.0], [-1.0, 0.0], [0.1, 0.0], [5.0, 0.0], [0.5, 0.9], [1.0, 0.5]])
+    assert np.asarray(in_sight(noise, ahead)).tolist() == [True, False, False, False, False, True]
+    with pytest.raises(ValueError, match="sight_near_m"):
+        EstimateNoise(sight_near_m=5.0).validate()
+    # two players at the origin: one facing the ball 1 m along +x, one facing away
+    pos, yaw, ball = jnp.zeros((2, 2)), jnp.asarray([0.0, np.pi]), jnp.asarray([1.0, 0.0])
+    sighting = next_sighting(noise, first_sighting(2), pos, yaw, ball, 0.025, jnp.bool_(False))
+    np.testing.assert_allclose(sighting[0], [1.0, 0.0, 0.0])
+    assert float(sighting[1, 2]) >= UNSEEN
+    # the ball rolls away behind the first: it is held where it was seen, ageing; a restart forgets it
+    later = next_sighting(noise, sighting, pos, jnp.asarray([np.pi, np.pi]), jnp.asarray([2.0, 0.0]), 0.5,
+                          jnp.bool_(False))
+    np.testing.assert_allclose(later[0], [1.0, 0.0, 0.5])
+    assert float(next_sighting(noise, sighting, pos, jnp.asarray([np.pi, np.pi]), ball, 0.5, jnp.bool_(True))[0, 2]) \
+        >= UNSEEN
+    np.testing.assert_allclose(held_ball(later, jnp.asarray([[0.5, 0.0], [0.0, 0.0]]), jnp.asarray([np.pi / 2, 0.0])),
+                               [[0.0, -0.5], [0.0, 0.0]], atol=1e-6)  # to the right of one turned left
+    # features of 3 players, the ball 0.5 m ahead of each: seen now, held 0.5 s at a stale spot, unseen 2 s
+    n = 20000
+    game = jnp.broadcast_to(jnp.asarray([0.5, 0.0, -0.17, 0.0, 0.0, 0.0, -2.0, 0.0, 3.0, 0.0, 0.0, 2.0, 0.1, 0.0]),
+                            (n, 14))
+    error = jax.random.normal(jax.random.PRNGKey(2), (n, 11))
+    for where, age, centre, size in (((0.5, 0.0), 0.0, (0.5, 0.0), noise.ball),
+                                     ((0.2, 0.3), 0.5, (0.2, 0.3), noise.ball),
+                                     ((0.2, 0.3), 2.0, (0.5, 0.0), noise.unseen_ball + 0.5 * noise.ball_per_m)):
+        out = np.asarray(blurred(noise, error, game, (jnp.broadcast_to(jnp.asarray(where), (n, 2)), jnp.full(n, age))))
+        np.testing.assert_allclose(out[:, 0:2].mean(0), centre, atol=0.01)
+        np.testing.assert_allclose(out[:, 0:2].std(0), size, rtol=0.05)
+        np.testing.assert_array_equal(out[:, 2:], np.asarray(blurred(EstimateNoise(), error, game))[:, 2:])
+
+
 def test_estimate_noise_blurs_only_the_deployable_game_features(game):
     from legged.soccer.env import SoccerEnv
-    from legged.soccer.estimate_noise import EstimateNoise, blurred
+    from legged.soccer.estimate_noise import EstimateNoise, blurred, in_sight
     from legged.soccer.task_config import SoccerConfig
 
     with pytest.raises(ValueError, match="estimate_noise .* vision player"):
@@ -345,4 +383,8 @@ def test_estimate_noise_blurs_only_the_deployable_game_features(game):
     np.testing.assert_allclose(noisy[..., :p], truth[..., :p], atol=1e-6)
     blur = blurred(env.config.estimate_noise, state.info["estimate_error"].reshape(4, -1), truth[..., p:].reshape(4, -1))
     np.testing.assert_allclose(noisy[..., p:].reshape(4, -1), blur, atol=1e-5)
+    # every player's last sighting of the ball is kept (for estimate_noise.sight): seen now, or aged by steps
+    ball, age = truth[..., p:p + 2].reshape(4, 2), np.asarray(state.info["ball_sighting"][..., 2]).reshape(4)
+    seen = np.asarray(in_sight(env.config.estimate_noise, ball))
+    assert np.all(age[seen] == 0) and np.all(age[~seen] > 0)
     assert float(jnp.abs(noisy[..., p:p + 2] - truth[..., p:p + 2]).min()) > 0  # every player, every game blurred

@@ -345,15 +345,16 @@ def test_what_a_vision_player_that_estimates_the_game_steers_by(estimating):
 
 def test_a_shipped_piloted_vision_player_brings_its_pilot_to_games_and_drills():
     """A vision student whose config names a pilot (TrainConfig.pilot; assets/policies/op3-soccer-1v1-vision-piloted)
-    is steered by it wherever it plays: in games (build_env: eval, view) and in drills (drill_env). A run that is not
-    a state soccer player commanding the same walker is refused by name."""
+    is steered by it wherever it plays: in games (build_env: eval, view, DAgger) and in drills (drill_env); kl
+    refuses it. A run that is not a state soccer player commanding the same walker is refused by name."""
     from pathlib import Path
 
     from legged.soccer.drills import DrillConfig
     from policies.drill import drill_env
     from policies.evaluate import state_player_game, steer_with_pilot
     from policies.run_dir import RunDir
-    from policies.training import build_env
+    from policies.config import ConfigError
+    from policies.training import build_env, refuse_pilot
 
     piloted = Path(__file__).resolve().parents[1] / "assets/policies/op3-soccer-1v1-vision-piloted"
     config = RunDir(piloted).load_config()
@@ -367,6 +368,9 @@ def test_a_shipped_piloted_vision_player_brings_its_pilot_to_games_and_drills():
     assert trained_on_the_drill.state_pilot is not None
     with pytest.raises(ValueError, match="pilot assets/policies/op3-walker: a soccer opponent is"):
         steer_with_pilot(game, "assets/policies/op3-walker")
+    refuse_pilot(config)  # DAgger learns the estimate in the piloted games: its labels do not depend on who acts
+    with pytest.raises(ConfigError, match="distil by kl without it"):
+        refuse_pilot(dataclasses.replace(config, algo="kl"))  # kl's PPO would learn corrections the pilot ignores
     # `legged eval --compare-pilot` (and --compare-teacher) count on the state player's game starting as the
     # student's for the same reset key: the pilot, trained on estimate errors, plays them at the truth
     truth = state_player_game(RunDir(config.pilot).load_config())

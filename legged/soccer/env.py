@@ -32,7 +32,7 @@ from legged.sensors.raycam import render
 from legged.soccer import observe, randomize, rules
 from legged.soccer.sightings import (BALL_MIN_SHADE, NET_MIN_SHADE, SIGHTED, SIGHTING_SIZE, camera_agents, pixel_points,
                                      sighting)
-from legged.soccer.estimate_noise import blurred, first_error, next_error
+from legged.soccer.estimate_noise import blurred, first_error, first_sighting, held_ball, next_error, next_sighting
 from legged.soccer.layout import SoccerLayout
 from legged.soccer.pitch import goal_centres, kickoff_poses
 from legged.soccer.placo_player import initial_memory
@@ -78,6 +78,7 @@ class SoccerEnv(MjxEnv):
         info = self._initial_info(rng)
         if self.config.estimate_noise.enabled:
             info["estimate_error"] = first_error(jax.random.fold_in(rng, 11), self.n_agents, self.n_agents - 1)
+            info["ball_sighting"] = first_sighting(self.n_agents)
         info["dr"] = randomize.sample(k_dr, self.config.randomization, self.mj_model, self.config.scene.ball_mass)
         return Spawn(qpos=qpos, qvel=qvel, ctrl=self._ctrl0, info=info)
 
@@ -168,6 +169,10 @@ class SoccerEnv(MjxEnv):
         info["last_action"] = jnp.where(kickoff, 0.0, info["last_action"])
         info["last_qvel"] = jnp.where(kickoff, 0.0, info["last_qvel"])
         info["walker_state"] = jnp.where(kickoff, 0.0, info["walker_state"])
+        if c.estimate_noise.enabled:  # where each player last saw the ball (used with estimate_noise.sight)
+            now = observe.read_bodies(self.layout, data.qpos, data.qvel)
+            info["ball_sighting"] = next_sighting(c.estimate_noise, info["ball_sighting"], now.pos[:, :2], now.yaw,
+                                                  now.ball_pos[:2], self.dt, info["teleported"])
 
         metrics = {f"reward/{k}": v for k, v in terms.items()}
         score = info["score"].astype(jnp.float32)
@@ -207,7 +212,8 @@ class SoccerEnv(MjxEnv):
         clean = jnp.concatenate([proprio, game], -1)
         state = proprio if c.vision else clean
         if c.estimate_noise.enabled:  # the deployable state only: critics and frozen opponents read the truth
-            state = jnp.concatenate([proprio, blurred(c.estimate_noise, info["estimate_error"], game)], -1)
+            held = (held_ball(info["ball_sighting"], b.pos[:, :2], b.yaw), info["ball_sighting"][:, 2])
+            state = jnp.concatenate([proprio, blurred(c.estimate_noise, info["estimate_error"], game, held)], -1)
         if c.vision_heading:
             state = jnp.concatenate([proprio, observe.attack_direction(b, self._team, self._goals)], -1)
         if c.noise.enabled:
