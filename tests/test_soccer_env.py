@@ -362,17 +362,18 @@ def test_estimate_noise_sight_gives_the_ball_seen_held_then_guessed():
 
 def test_estimate_noise_blurs_only_the_deployable_game_features(game):
     from legged.soccer.env import SoccerEnv
-    from legged.soccer.estimate_noise import EstimateNoise, blurred, in_sight
+    from legged.soccer.estimate_noise import EstimateNoise, blurred, held_ball, in_sight
     from legged.soccer.task_config import SoccerConfig
 
     with pytest.raises(ValueError, match="estimate_noise .* vision player"):
         SoccerConfig(vision=True, estimate_noise=EstimateNoise(enabled=True))
     with pytest.raises(ValueError, match="correlation_s positive"):
         SoccerConfig(estimate_noise=EstimateNoise(correlation_s=0.0))
-    env = SoccerEnv(SoccerConfig(estimate_noise=EstimateNoise(enabled=True)))
+    env = SoccerEnv(SoccerConfig(estimate_noise=EstimateNoise(enabled=True, sight=True)))
     keys = jax.random.split(jax.random.PRNGKey(3), 2)
     step = jax.jit(jax.vmap(env.step))  # the clean game: the module's soccer-1v1 (SoccerConfig's defaults)
     state, clean = jax.jit(jax.vmap(env.reset))(keys), game.reset(keys)
+    assert "ball_sighting" not in clean.info  # kept for estimate_noise.sight only
     for _ in range(2):
         zeros = jnp.zeros((2, env.n_agents, env.action_size))
         state, clean = step(state, zeros), game.step(clean, zeros)
@@ -381,10 +382,15 @@ def test_estimate_noise_blurs_only_the_deployable_game_features(game):
     noisy, truth = state.obs["state"], state.obs["privileged_state"][..., :size]
     p = observe.PROPRIO_SIZE
     np.testing.assert_allclose(noisy[..., :p], truth[..., :p], atol=1e-6)
-    blur = blurred(env.config.estimate_noise, state.info["estimate_error"].reshape(4, -1), truth[..., p:].reshape(4, -1))
-    np.testing.assert_allclose(noisy[..., p:].reshape(4, -1), blur, atol=1e-5)
-    # every player's last sighting of the ball is kept (for estimate_noise.sight): seen now, or aged by steps
-    ball, age = truth[..., p:p + 2].reshape(4, 2), np.asarray(state.info["ball_sighting"][..., 2]).reshape(4)
+    # every player's last sighting of the ball is kept: seen now (age 0), or aged by steps
+    sighting = state.info["ball_sighting"].reshape(4, -1)
+    ball, age = truth[..., p:p + 2].reshape(4, 2), np.asarray(sighting[:, 2])
     seen = np.asarray(in_sight(env.config.estimate_noise, ball))
     assert np.all(age[seen] == 0) and np.all(age[~seen] > 0)
+    where = lambda q, v: (lambda b: (b.pos[:, :2], b.yaw))(observe.read_bodies(env.layout, q, v))
+    pos, yaw = jax.vmap(where)(state.pipeline_state.qpos, state.pipeline_state.qvel)
+    held = (held_ball(sighting, pos.reshape(4, 2), yaw.reshape(4)), sighting[:, 2])
+    blur = blurred(env.config.estimate_noise, state.info["estimate_error"].reshape(4, -1),
+                   truth[..., p:].reshape(4, -1), held)
+    np.testing.assert_allclose(noisy[..., p:].reshape(4, -1), blur, atol=1e-5)
     assert float(jnp.abs(noisy[..., p:p + 2] - truth[..., p:p + 2]).min()) > 0  # every player, every game blurred

@@ -111,6 +111,40 @@ def test_its_features_are_the_games_for_its_pose_and_the_ball_is_kept_then_forgo
     np.testing.assert_allclose(features(tracker, 2 * BALL_MEMORY_S)[:2], ego(ball), atol=1e-4)  # unless kept longer
 
 
+def test_with_ball_motion_it_follows_a_rolling_ball_and_rolls_it_on_out_of_view():
+    """A ball rolling at 0.8 m/s, slowing by BALL_DECEL, sighted every period with 3 cm errors for 1 s, then out of
+    view for 0.5 s: the filter's velocity and its ball rolled on are close to the truth, nearer than the ball held
+    where it was last seen; without ball_motion the ball is held (as before)."""
+    from legged.soccer.tracker import BALL_DECEL
+
+    truth, dt = np.array([-1.0, 0.2, 0.3]), 0.025
+    noise = np.random.default_rng(0).normal(0.0, 0.03, (60, 2))
+    ball, vel = np.zeros(2), np.array([0.0, 0.8])  # kicked off the centre spot
+    moving, held = tracker_kickoff(jnp.asarray(truth, jnp.float32)), tracker_kickoff(jnp.asarray(truth, jnp.float32))
+    estimate = jnp.zeros(14)
+    features = lambda t, motion: np.asarray(tracked_features(t, estimate, PARTS["ball"], PARTS["own_goal"],
+                                                             PARTS["opponent_goal"], OWN_XY, OPPONENT_XY,
+                                                             ball_vel=slice(3, 6) if motion else None))
+    ego = lambda xy: np.asarray(yaw_rotate(jnp.float32(truth[2]), jnp.asarray(xy, jnp.float32)))
+    for k in range(60):
+        seen = seen_from(truth, ball=ball + noise[k]) if k < 40 else seen_from(truth)
+        moving = tracker_sight(tracker_step(moving, jnp.zeros(2), jnp.float32(0.0), jnp.bool_(False), dt, True),
+                               seen, NETS, GOAL_WIDTH, True)
+        held = sight(tracker_step(held, jnp.zeros(2), jnp.float32(0.0), jnp.bool_(False), dt), seen)
+        if k == 39:
+            np.testing.assert_allclose(features(moving, True)[3:5], ego(vel), atol=0.1)  # its velocity, 1 s on
+            last_seen = ball + noise[k]
+        ball, vel = ball + vel * dt, vel * (1 - BALL_DECEL * dt / np.linalg.norm(vel))
+    np.testing.assert_allclose(features(held, False)[:2], ego(last_seen - truth[:2]), atol=1e-4)  # held
+    rolled_on = np.linalg.norm(features(moving, True)[:2] - ego(ball - truth[:2]))
+    assert rolled_on < 0.04 and rolled_on < np.linalg.norm(last_seen - ball) / 2
+    np.testing.assert_array_equal(features(moving, False)[3:6], 0.0)  # velocity the player's own without ball_vel
+    with pytest.raises(ValueError, match="vision_ball_velocity .* needs vision_tracker"):
+        from legged.soccer.task_config import SoccerConfig
+
+        SoccerConfig(vision=True, vision_ball_velocity=True)
+
+
 def test_its_inputs_are_what_it_knows_and_zeros_elsewhere():
     truth = np.array([-0.8, 0.3, -0.5])
     inputs = lambda t: np.asarray(tracker_inputs(t, OWN_XY, OPPONENT_XY))
@@ -198,3 +232,29 @@ def test_a_drill_refuses_a_player_that_reads_its_tracker(tmp_path):
     (tmp_path / "config.yaml").write_text(yaml.safe_dump(to_dict(dataclasses.replace(config, env=env))))
     with pytest.raises(ValueError, match="drills play without the tracker"):
         run_drill("empty-goal", str(tmp_path), episodes=1, seed=0, progress=False)
+
+
+def test_the_ball_decelerates_in_the_games_physics_as_the_filter_assumes():
+    """BALL_DECEL against MuJoCo: a ball rolled across the default pitch slows at about that rate once it rolls."""
+    import mujoco
+
+    from legged.soccer.env import SoccerEnv
+    from legged.soccer.task_config import SoccerConfig
+    from legged.soccer.tracker import BALL_DECEL
+
+    env = SoccerEnv(SoccerConfig())
+    model = env.mj_model
+    data = mujoco.MjData(model)
+    q, v = env.layout.ball_qpos_adr, env.layout.ball_dof_adr
+    data.qpos[:] = np.asarray(env._qpos0)  # the robots on their kick-off spots
+    data.qpos[q:q + 3], data.qvel[v] = [0.0, 1.0, env.config.scene.ball_radius], 1.2  # away from the robots
+    every = round(0.025 / model.opt.timestep)
+    speeds = []
+    for k in range(round(2.0 / model.opt.timestep)):
+        mujoco.mj_step(model, data)
+        if k % every == 0:
+            speeds.append(np.linalg.norm(data.qvel[v:v + 2]))
+    speeds, times = np.array(speeds), 0.025 * np.arange(len(speeds))
+    rolling = (times > 0.1) & (speeds > 0.15)  # after the slide, before it stops
+    assert rolling.sum() > 20
+    assert abs(-np.polyfit(times[rolling], speeds[rolling], 1)[0] - BALL_DECEL) < 0.1

@@ -78,6 +78,7 @@ class SoccerEnv(MjxEnv):
         info = self._initial_info(rng)
         if self.config.estimate_noise.enabled:
             info["estimate_error"] = first_error(jax.random.fold_in(rng, 11), self.n_agents, self.n_agents - 1)
+        if self.config.estimate_noise.enabled and self.config.estimate_noise.sight:
             info["ball_sighting"] = first_sighting(self.n_agents)
         info["dr"] = randomize.sample(k_dr, self.config.randomization, self.mj_model, self.config.scene.ball_mass)
         return Spawn(qpos=qpos, qvel=qvel, ctrl=self._ctrl0, info=info)
@@ -169,7 +170,7 @@ class SoccerEnv(MjxEnv):
         info["last_action"] = jnp.where(kickoff, 0.0, info["last_action"])
         info["last_qvel"] = jnp.where(kickoff, 0.0, info["last_qvel"])
         info["walker_state"] = jnp.where(kickoff, 0.0, info["walker_state"])
-        if c.estimate_noise.enabled:  # where each player last saw the ball (used with estimate_noise.sight)
+        if c.estimate_noise.enabled and c.estimate_noise.sight:  # where each player last saw the ball
             now = observe.read_bodies(self.layout, data.qpos, data.qvel)
             info["ball_sighting"] = next_sighting(c.estimate_noise, info["ball_sighting"], now.pos[:, :2], now.yaw,
                                                   now.ball_pos[:2], self.dt, info["teleported"])
@@ -212,7 +213,9 @@ class SoccerEnv(MjxEnv):
         clean = jnp.concatenate([proprio, game], -1)
         state = proprio if c.vision else clean
         if c.estimate_noise.enabled:  # the deployable state only: critics and frozen opponents read the truth
-            held = (held_ball(info["ball_sighting"], b.pos[:, :2], b.yaw), info["ball_sighting"][:, 2])
+            held = None
+            if c.estimate_noise.sight:
+                held = (held_ball(info["ball_sighting"], b.pos[:, :2], b.yaw), info["ball_sighting"][:, 2])
             state = jnp.concatenate([proprio, blurred(c.estimate_noise, info["estimate_error"], game, held)], -1)
         if c.vision_heading:
             state = jnp.concatenate([proprio, observe.attack_direction(b, self._team, self._goals)], -1)

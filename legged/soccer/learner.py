@@ -212,7 +212,8 @@ class LearnerView(MjxEnv):
             parts = self._world_parts
             world = tracked_features(state.info["tracker"], world, parts["ball"], parts["own_goal"],
                                      parts["opponent_goal"], self._goal_xy[0], self._goal_xy[1],
-                                     self.config.vision_ball_memory_s)
+                                     self.config.vision_ball_memory_s,
+                                     parts["ball_vel"] if self.config.vision_ball_velocity else None)
         if self.config.vision_sighted_ball:
             sighting = self._sightings(state.info)[0]  # the ball's: seen, then x, y, z
             ball = self.estimate_parts["ball"]
@@ -296,14 +297,15 @@ class LearnerView(MjxEnv):
         up = -proprio[:3] / jnp.maximum(jnp.linalg.norm(proprio[:3]), 1e-6)  # gravity in the torso frame leads
         mine = walker_state[LEARNER]
         tracker = tracker_step(state.info["tracker"], mine[1:3], jnp.dot(proprio[3:6], up), getting_up(mine),
-                               self.game.dt)
+                               self.game.dt, self.config.vision_ball_velocity)
         kickoff = jnp.any(game.info["score"] != state.info["score"])
         tracker = jnp.where(kickoff, tracker_kickoff(self.game._kickoff[LEARNER]), tracker)
         return self._sight(tracker, game.info)
 
     def _sight(self, tracker: jax.Array, info: dict) -> jax.Array:
         """The learner's tracker corrected by its camera's sightings in the game's `info`."""
-        return tracker_sight(tracker, self._sightings(info), self._net_xy, self.config.scene.goal_width)
+        return tracker_sight(tracker, self._sightings(info), self._net_xy, self.config.scene.goal_width,
+                             self.config.vision_ball_velocity)
 
     def observation_layout(self) -> dict:
         layout = self.game.observation_layout()

@@ -88,6 +88,10 @@ class SoccerConfig(EnvConfig):
     vision_ball_memory_s: float = 1.0
     """With `vision_tracker`: how long the tracker keeps the ball where the camera last saw it (s); after that the
     player's own estimate of the ball is used."""
+    vision_ball_velocity: bool = False
+    """With `vision_tracker`: the tracker follows the ball's motion (a constant-velocity Kalman filter over its
+    sightings, legged.soccer.tracker), so the placo command also reads the ball's velocity from it while the ball is
+    fresh, and a ball out of view rolls on; false: the ball is held where last seen, its velocity estimated."""
     vision_sighted_ball: bool = False
     """With `vision_sightings`, for a player that estimates the game (command_prior=placo): the placo command
     takes the ball's position from the sighting whenever the camera sees the ball, from the player's own
@@ -129,6 +133,9 @@ class SoccerConfig(EnvConfig):
             raise ValueError("vision_tracker tracks a vision player's pose and the ball from its camera: it needs vision")
         if not self.vision_ball_memory_s > 0:
             raise ValueError(f"vision_ball_memory_s must be > 0 seconds, got {self.vision_ball_memory_s}")
+        if self.vision_ball_velocity and not self.vision_tracker:
+            raise ValueError("vision_ball_velocity lets a vision player's tracker follow the ball's motion: it needs "
+                             "vision_tracker")
         if self.vision_tracker_inputs and not self.vision_tracker:
             raise ValueError("vision_tracker_inputs gives a vision player's network what its tracker knows: it needs "
                              "vision_tracker")

@@ -3,7 +3,8 @@
 Plays games of the student against the placo player (native physics, deterministic actions) and reports, over
 the frames with the ball within 1 m of the student, the RMS error of the ball's position by where it came from
 (sighted in this frame, remembered by the tracker for up to 1 s, the network's estimate) and of the ball's
-velocity (the network's estimate: the tracker keeps no velocity).
+velocity (the network's estimate: the tracker keeps no velocity); then the same frames split by the ball's
+distance and bearing: how often it was not sighted in that frame, how often the network guessed it, and the RMS.
 
     .venv/bin/python assets/runs/soccer-1v1-ballnoise-cpu2/ball_estimate.py assets/policies/op3-soccer-1v1-vision 777 32
 """
@@ -42,12 +43,12 @@ while playing.any():
     frames.append(np.stack([np.linalg.norm(truth[:, :2], axis=-1), source,
                             np.linalg.norm(estimate[:, :2] - truth[:, :2], axis=-1),
                             np.linalg.norm(estimate[:, 3:5] - truth[:, 3:5], axis=-1),
-                            np.linalg.norm(truth[:, 3:5], axis=-1)], -1)[playing])
+                            np.linalg.norm(truth[:, 3:5], axis=-1), np.arctan2(truth[:, 1], truth[:, 0])], -1)[playing])
     batch, result = vector.step(batch, jnp.asarray(action), *opponent)
     obs, done = result.obs, np.asarray(result.done)
     policy.reset(done)
     playing &= ~done
-distance, source, position, velocity, speed = np.concatenate(frames).T
+distance, source, position, velocity, speed, bearing = np.concatenate(frames).T
 near = distance < 1.0
 rms = lambda x, m: float(np.sqrt(np.mean(x[m] ** 2)))
 print(f"ball within 1 m in {near.mean():.1%} of the frames; there, position RMS {rms(position, near):.3f} m, "
@@ -55,3 +56,11 @@ print(f"ball within 1 m in {near.mean():.1%} of the frames; there, position RMS 
 for k, name in enumerate(["sighted in this frame", "remembered (tracker, up to 1 s)", "the network's estimate"]):
     m = near & (source == k)
     print(f"  {name:32s} {m.sum() / near.sum():6.1%} of those frames, position RMS {rms(position, m):.3f} m")
+print("frames with the ball within 1 m, by distance (m) and |bearing| (rad):")
+for lo, hi in [(0, 0.25), (0.25, 0.5), (0.5, 1.0)]:
+    for blo, bhi in [(0, 0.4), (0.4, 0.75), (0.75, 3.2)]:
+        m = near & (distance >= lo) & (distance < hi) & (np.abs(bearing) >= blo) & (np.abs(bearing) < bhi)
+        if m.sum():
+            print(f"  d {lo:.2f}-{hi:.2f} |bearing| {blo:.2f}-{bhi:.2f}: {m.sum()/near.sum():6.1%} of near; "
+                  f"not sighted {np.mean(source[m] > 0):6.1%}, guessed {np.mean(source[m] == 2):6.1%}, "
+                  f"pos RMS {rms(position, m):.3f}")
