@@ -219,6 +219,9 @@ class TrainConfig:
     """Vision students that estimate the game (command_prior=placo): run directory of a state soccer player whose
     corrections, at the student's estimate, steer it instead of its own (LearnerView.steer_with); eval, view,
     drill and export load it with the student. Not for training. '' : the student's own corrections."""
+    steered_student: str = ""
+    """State soccer players (command_prior=placo): run directory of a vision student that estimates the game;
+    this player then trains as its pilot, in its camera game on its frozen estimate (policies.steered)."""
 
     @property
     def estimates_world(self) -> bool:
@@ -308,6 +311,10 @@ class TrainConfig:
         if cfg.pilot in ("placo", "scripted", "self", "teacher", "none"):
             raise ConfigError(f"pilot={cfg.pilot}: a pilot is the run directory of a state soccer player trained "
                               f"with command_prior=placo")
+        if cfg.steered_student and (entry.vision or not cfg.command_prior or cfg.backend != "rsl" or cfg.algo != "ppo"):
+            raise ConfigError(f"steered_student (a vision student this player learns to steer) needs a state soccer "
+                              f"task with command_prior=placo, trained by rsl ppo; this run is {cfg.task}, "
+                              f"command_prior {cfg.command_prior!r}, {cfg.backend} {cfg.algo}")
         if cfg.num_envs * cfg.ppo.num_steps_per_env % cfg.ppo.num_mini_batches:
             raise ConfigError(f"num_envs x num_steps_per_env ({cfg.num_envs} x {cfg.ppo.num_steps_per_env}) must "
                               f"divide into num_mini_batches ({cfg.ppo.num_mini_batches})")

@@ -113,7 +113,8 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     threads = config.threads or default_threads()
     if config.physics == "native":
         torch.set_num_threads(threads)
-    vector = VectorEnv.of(env, local_envs, config.physics, threads)
+    steered = getattr(env, "vec_env", None)  # a pilot in its vision student's game (policies.steered)
+    vector = VectorEnv.of(env if steered is None else env.view, local_envs, config.physics, threads)
     key = jax.random.fold_in(jax.random.fold_in(jax.random.PRNGKey(config.seed), iteration), launch.rank)
     hib = config.algo in ("hib", "hib-no-ib")
     levels = None if payload is None else payload.get("curriculum_levels")
@@ -122,6 +123,8 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     venv = RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device,
                      latent_noise=config.latent.latent_dim if hib else 0,
                      levels=None if levels is None else levels.numpy())
+    if steered is not None:
+        venv = steered(venv)
     if config.random_episode_start:  # episodes end on different iterations
         generator = torch.Generator().manual_seed(config.seed + launch.rank + 7919 * iteration)
         venv.episode_length_buf = torch.randint(0, env.config.episode_steps, (local_envs,), generator=generator)

@@ -59,6 +59,10 @@ def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> di
         return train_brax(build_env(config), config, run, resume=resume, progress=progress)
     from policies.rsl_backend import train_rsl
 
+    if config.steered_student:  # a pilot, trained in its vision student's game (policies.steered)
+        from policies.steered import steered_env
+
+        return train_rsl(steered_env(config), config, run, resume=resume, progress=progress)
     return train_rsl(build_env(config), config, run, resume=resume, progress=progress)
 
 
