@@ -101,7 +101,7 @@ class SteeredVecEnv(VecEnv):
     episode_stats = property(lambda self: self.inner.episode_stats)
 
     def curriculum_levels(self):
-        return None
+        return self.inner.curriculum_levels()
 
     def _see(self) -> None:
         """The student's actions at the current observations (its estimate among them) and the learner's."""

@@ -343,7 +343,7 @@ def test_a_soccer_players_head_camera_in_headless_chromium(tmp_path):
             page = browser.new_page(viewport={"width": 1024, "height": 700})
             page.goto(f"http://127.0.0.1:{port}")
             page.locator("canvas[data-engine]").wait_for(timeout=WAIT_S * 1000)
-            page.get_by_text("steered from its estimate by assets/policies/op3-soccer-1v1-pilot").first.wait_for(
+            page.get_by_text("steered from its estimate by assets/policies/op3-soccer-1v1-pilot-steered").first.wait_for(
                 timeout=WAIT_S * 1000)
             page.get_by_role("tab", name="Camera").click()
             page.get_by_text("camera observation recorded by the task").first.wait_for(timeout=WAIT_S * 1000)

@@ -358,7 +358,7 @@ def test_a_shipped_piloted_vision_player_brings_its_pilot_to_games_and_drills():
 
     piloted = Path(__file__).resolve().parents[1] / "assets/policies/op3-soccer-1v1-vision-piloted"
     config = RunDir(piloted).load_config()
-    assert config.pilot == "assets/policies/op3-soccer-1v1-pilot"
+    assert config.pilot == "assets/policies/op3-soccer-1v1-pilot-steered"
     game = build_env(config, progress=False)
     assert game.state_pilot is not None and game.pilot_name == config.pilot
     assert game.state_pilot.mean.shape[-1] == PROPRIO_SIZE + game.world_size
