@@ -31,6 +31,7 @@ from policies.config import DISTILL_ALGOS, TrainConfig
 from policies.distributed import Launch, init_torch_processes
 from policies.rsl_vecenv import RslVecEnv
 from policies.run_dir import RunDir, RunDirError, TrainingDiverged, check_compatible
+from policies.steered import SteeredView
 
 
 def dummy_observations(obs_sizes: dict, num_envs: int = 1) -> TensorDict:
@@ -113,8 +114,8 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     threads = config.threads or default_threads()
     if config.physics == "native":
         torch.set_num_threads(threads)
-    steered = getattr(env, "vec_env", None)  # a pilot in its vision student's game (policies.steered)
-    vector = VectorEnv.of(env if steered is None else env.view, local_envs, config.physics, threads)
+    played = env.view if isinstance(env, SteeredView) else env  # a pilot learns in its vision student's game
+    vector = VectorEnv.of(played, local_envs, config.physics, threads)
     key = jax.random.fold_in(jax.random.fold_in(jax.random.PRNGKey(config.seed), iteration), launch.rank)
     hib = config.algo in ("hib", "hib-no-ib")
     levels = None if payload is None else payload.get("curriculum_levels")
@@ -123,8 +124,8 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     venv = RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device,
                      latent_noise=config.latent.latent_dim if hib else 0,
                      levels=None if levels is None else levels.numpy())
-    if steered is not None:
-        venv = steered(venv)
+    if played is not env:
+        venv = env.vec_env(venv)
     if config.random_episode_start:  # episodes end on different iterations
         generator = torch.Generator().manual_seed(config.seed + launch.rank + 7919 * iteration)
         venv.episode_length_buf = torch.randint(0, env.config.episode_steps, (local_envs,), generator=generator)

@@ -14,6 +14,7 @@ load it as one.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import jax
@@ -32,8 +33,8 @@ from policies.run_dir import RunDir
 def steered_env(config: TrainConfig) -> "SteeredView":
     """The training environment of a state soccer run with `steered_student`: the student's camera game as the
     learner's view, with the student loaded; ConfigError naming what does not fit, before anything compiles."""
-    from legged.tasks import learner_env, make, task_entry
-    from policies.policy_io import load_policy, load_walker
+    from policies.policy_io import load_policy
+    from policies.training import build_env
 
     path = Path(config.steered_student)
     student = RunDir(path).load_config()  # RunDirError naming the path if it is not a run
@@ -47,9 +48,8 @@ def steered_env(config: TrainConfig) -> "SteeredView":
     if (student.walker, student.command_prior, student.getup) != (config.walker, config.command_prior, config.getup):
         raise ConfigError(f"steered_student {path} commands walker={student.walker!r}, command_prior="
                           f"{student.command_prior!r}, getup={student.getup!r}; this run must command the same")
-    walker = load_walker(student.walker, student.getup, student.command_prior)
-    game = make(student.task, student.env)
-    view = learner_env(task_entry(student.task), game, config.ppo.activation, config.ppo.actor_hidden, walker)
+    # the student's game as eval plays it, without its pilot; the self-play opponents are this run's networks
+    view = build_env(dataclasses.replace(student, pilot="", drill="", ppo=config.ppo), progress=False)
     return SteeredView(view, load_policy(path)[0])
 
 
@@ -76,6 +76,10 @@ class SteeredView:
         return {"state": feature_layout(self.view.game.layout.players_per_team),
                 "privileged_state": self.view.game.observation_layout()["privileged_state"]}
 
+    def learner_state(self, state, student_actions: jax.Array) -> jax.Array:
+        """The learner's `state` in one game: its proprioception and the student's estimate as the game uses it."""
+        return jnp.concatenate([state.obs["state"][:PROPRIO_SIZE], self.view.used_estimate(state, student_actions)])
+
     def vec_env(self, inner: RslVecEnv) -> "SteeredVecEnv":
         """The rsl-rl environment the learner trains in, over `inner` (the student's game, batched)."""
         return SteeredVecEnv(inner, self)
@@ -90,7 +94,7 @@ class SteeredVecEnv(VecEnv):
         self.num_envs, self.device, self.cfg = inner.num_envs, inner.device, inner.cfg
         self.num_actions = view.action_size
         self.max_episode_length = inner.max_episode_length
-        self._used = jax.jit(jax.vmap(view.view.used_estimate))
+        self._learner_state = jax.jit(jax.vmap(view.learner_state))
         self.student.reset()
         self._see()
 
@@ -108,8 +112,7 @@ class SteeredVecEnv(VecEnv):
         obs = self.inner.batch.state.obs
         groups = {k: jax.device_get(obs[k]) for k in self.student.inputs}
         self._student_actions = jnp.asarray(self.student.act(groups))
-        used = self._used(self.inner.batch.state, self._student_actions)
-        state = jnp.concatenate([obs["state"][:, :PROPRIO_SIZE], used], -1)
+        state = self._learner_state(self.inner.batch.state, self._student_actions)
         self._obs = TensorDict({"state": to_torch(state, self.device),
                                 "privileged_state": to_torch(obs["privileged_state"], self.device)},
                                batch_size=[self.num_envs], device=self.device)

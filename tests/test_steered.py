@@ -69,3 +69,17 @@ def test_steered_student_names_a_vision_student_of_the_same_game_and_skills():
         steered_env(_pilot_config(steered_student=str(ROOT / "assets/policies/op3-soccer-1v1")))
     with pytest.raises(ConfigError, match="this run must command the same"):
         steered_env(_pilot_config(getup=""))
+
+
+def test_a_steered_pilot_trains_in_its_students_game(tmp_path):
+    """`legged train --set steered_student=...` from the shipped pilot (init_from): train_rsl plays the student's
+    game, wraps it in the steered VecEnv, warm-starts the learner by its state layout and writes a checkpoint."""
+    from policies.training import _train
+
+    pilot = str(ROOT / RunDir(ROOT / STUDENT).load_config().pilot)
+    config = _pilot_config(num_envs=4, timesteps=4 * 24, threads=1, checkpoint_every=1, init_from=pilot,
+                           random_episode_start=False)
+    run = RunDir(tmp_path / "steered").create(config)
+    record = _train(config, run, resume=False, progress=False)
+    assert record["step"] == 4 * 24 and np.isfinite(record["reward_per_step"])
+    assert run.latest_checkpoint().name == f"step_{4 * 24:012d}.pt"
