@@ -72,6 +72,7 @@ def _bench_rollout(env, batch: int, seconds: float, seed: int, threads: int) -> 
     native = NativeEnvs(env, batch, threads)
     state = native.reset(jax.random.split(jax.random.PRNGKey(seed), batch))
     ctrls = [np.asarray(native.controls(state, a)) for a in _random_actions(env, batch, seed)]
+    ctrls = [c[:, -1] if c.ndim == 3 else c for c in ctrls]  # a latency schedule: its targets
     physics, steps, t0 = native.physics, 0, time.perf_counter()
     ctrl = physics.batch.bind("ctrl")
     while time.perf_counter() - t0 < seconds:
@@ -82,10 +83,11 @@ def _bench_rollout(env, batch: int, seconds: float, seed: int, threads: int) -> 
 
 
 def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0, physics=("mjx", "native"),
-              threads: int | None = None, progress=None) -> list[dict]:
-    """One record per (physics, batch size): env_steps_per_s (the training env: soccer tasks step the
-    learner's view against the script), compile_s, and the ratios to MJX and to bare rollout physics
-    measured in the same run."""
+              threads: int | None = None, progress=None, randomize: tuple[str, ...] = ("default",)) -> list[dict]:
+    """One record per (randomisation, physics, batch size): env_steps_per_s (the training env: soccer tasks step the
+    learner's view against the script), compile_s, and the ratios to MJX and to bare rollout physics measured in
+    the same run. `randomize`: the task's default config, or its domain randomisation `on` or `off` (each record
+    with it on gets `ratio_vs_off` where both ran)."""
     from legged.envs.native import check_threads
 
     entry = task_entry(task)
@@ -94,24 +96,37 @@ def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0
             raise ValueError(f"unknown physics {p!r}; choose from {', '.join(PHYSICS_CHOICES)}")
         if p != "rollout":
             entry.check(physics=p)
+    for r in randomize:
+        if r not in ("default", "on", "off"):
+            raise ValueError(f"--randomize takes default, on or off, not {r!r}")
     threads = check_threads(threads)
-    env = learner_env(entry, make(task))
-    records = []
-    for batch in batches:
-        by_physics = {}
-        for p in physics:
-            if progress:
-                progress(f"{task}: {p}, batch {batch}: compiling and timing for {seconds:.0f} s")
-            r = _bench_rollout(env, batch, seconds, seed, threads) if p == "rollout" else \
-                bench_vector(env, p, batch, seconds, seed, threads)
-            by_physics[p] = r = {"task": task, "batch": batch, "physics": p, **r,
-                                 "threads": threads if p != "mjx" else None, "ctrl_dt": env.dt,
-                                 "backend": jax.default_backend()}
-            records.append(r)
-        for p, r in by_physics.items():
-            for base in ("mjx", "rollout"):
-                if base in by_physics and base != p:
-                    r[f"ratio_vs_{base}"] = round(r["env_steps_per_s"] / by_physics[base]["env_steps_per_s"], 3)
+    records, runs = [], {}
+    for setting in randomize:
+        config = entry.config
+        if setting != "default":
+            config = dataclasses.replace(config, randomization=dataclasses.replace(config.randomization,
+                                                                                  enabled=setting == "on"))
+        env = learner_env(entry, make(task, config))
+        for batch in batches:
+            by_physics = {}
+            for p in physics:
+                if progress:
+                    progress(f"{task}: randomisation {setting}, {p}, batch {batch}: compiling and timing for "
+                             f"{seconds:.0f} s")
+                r = _bench_rollout(env, batch, seconds, seed, threads) if p == "rollout" else \
+                    bench_vector(env, p, batch, seconds, seed, threads)
+                by_physics[p] = r = {"task": task, "batch": batch, "physics": p, **r,
+                                     "threads": threads if p != "mjx" else None, "ctrl_dt": env.dt,
+                                     "backend": jax.default_backend(), "randomize": setting}
+                records.append(r)
+                runs[(setting, p, batch)] = r
+            for p, r in by_physics.items():
+                for base in ("mjx", "rollout"):
+                    if base in by_physics and base != p:
+                        r[f"ratio_vs_{base}"] = round(r["env_steps_per_s"] / by_physics[base]["env_steps_per_s"], 3)
+    for (setting, p, batch), r in runs.items():
+        if setting == "on" and ("off", p, batch) in runs:
+            r["ratio_vs_off"] = round(r["env_steps_per_s"] / runs[("off", p, batch)]["env_steps_per_s"], 3)
     return records
 
 

@@ -10,7 +10,8 @@ from legged.cli_bench import add_bench_commands
 from legged.cli_nav import add_navigation_commands
 from legged.cli_runs import add_run_commands
 from legged.cli_soccer import add_soccer_commands
-from legged.cli_args import (SEED, Parser, add_physics_options, bounded, choices, ints, join_negative_coordinates)
+from legged.cli_args import (SEED, Parser, add_physics_options, add_robot_option, bounded, choices, ints,
+                             join_negative_coordinates)
 
 
 def cmd_train(args) -> int:
@@ -45,12 +46,8 @@ def cmd_eval(args) -> int:
     import dataclasses
 
     from legged.tasks import task_entry
-    from policies.evaluate import (HELD_OUT_SEED_OFFSET, confined_eval_config, evaluate, held_out, latent_probe,
-                                   ood_config, summarize)
+    from policies.evaluate import ood_config, on_robot, robot_ratios
     from policies.policy_io import load_policy
-    from policies.run_dir import check_compatible
-    from policies.training import build_env
-
     from policies.run_dir import RunDir
 
     config = RunDir(args.run_dir).load_config()
@@ -78,15 +75,40 @@ def cmd_eval(args) -> int:
         raise ValueError(f"{args.run_dir} trained on the {config.drill} drill, where nobody else plays: its eval "
                          f"plays the drill, without --opponent or --teammate (or use `legged drill {config.drill} "
                          f"--player {args.run_dir}`)")
+    robots = args.compare_robots or [args.robot]
+    for robot in robots:  # a model that cannot be used fails here, before a policy is loaded or a scene compiled
+        on_robot(config, robot, args.physics)
     policy, config = load_policy(args.run_dir, args.checkpoint)
     if args.pilot:  # replaces the run's own pilot (none: the student's own corrections)
         pilot = {"teacher": config.distill.teacher, "none": ""}.get(args.pilot, args.pilot)
         config = dataclasses.replace(config, pilot=pilot).resolved()
+    configs = {r: on_robot(config, r) for r in robots}
     report = dict(physics=args.physics, seed=args.seed, checkpoint=str(policy.checkpoint), trained_steps=policy.step,
                   task=config.task)
     if args.ood:
         report["ood"] = True
-    if not confined:
+    if args.compare_robots:
+        report["robots"] = {r: _evaluate_run(args, c, policy) for r, c in configs.items()}
+        report["ratios"] = robot_ratios(report["robots"], robots[0])
+    else:
+        report.update(_evaluate_run(args, configs[args.robot], policy), robot=args.robot)
+    print(json.dumps(report) if args.json else json.dumps(report, indent=2))
+    return 0
+
+
+def _evaluate_run(args, config, policy) -> dict:
+    """`legged eval`'s figures of `policy` with the run config `config` (its robot model chosen)."""
+    import dataclasses
+
+    from legged.tasks import task_entry
+    from policies.evaluate import (HELD_OUT_SEED_OFFSET, confined_eval_config, evaluate, held_out, latent_probe,
+                                   ood_config, summarize)
+    from policies.run_dir import check_compatible
+    from policies.training import build_env
+
+    soccer = task_entry(config.task).kind == "soccer"
+    report = {}
+    if task_entry(config.task).kind != "confined":
         env_config = held_out(config.task, config.env)
         if args.oracle:
             env_config = dataclasses.replace(env_config, estimate_oracle=tuple(args.oracle))
@@ -127,8 +149,7 @@ def cmd_eval(args) -> int:
                               args.num_envs or min(args.episodes, 64), args.threads or None,
                               progress=not args.quiet, per_world=True)
             report["difficulties"][str(level)] = summarize(finals, True)
-    print(json.dumps(report) if args.json else json.dumps(report, indent=2))
-    return 0
+    return report
 
 
 def _other_players(args, env, policy) -> tuple:
@@ -245,7 +266,7 @@ def cmd_view(args) -> int:
     request = ViewRequest(run_dir=args.run_dir, task=args.task, checkpoint=args.checkpoint, trajectory=args.trajectory,
                           num_envs=args.num_envs, physics=args.physics, seed=args.seed, steps=args.steps, host=args.host,
                           port=None if args.save else args.port, opponent=args.opponent,
-                          drill=args.drill)
+                          drill=args.drill, robot=args.robot)
     resolved = resolve(request, log=lambda msg: print(msg, flush=True))
     if args.save:
         if resolved.source is None:
@@ -348,6 +369,10 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--compare-pilot", action="store_true",
                     help="a piloted vision student: also play its pilot at the truth in the same games and report "
                          "the student's goals over the pilot's (as --compare-teacher)")
+    add_robot_option(ev)
+    ev.add_argument("--compare-robots", type=lambda v: [p for p in v.split(",") if p], default=None,
+                    metavar="project,menagerie,...",
+                    help="the same episodes on each robot model, with each figure's ratio to the first model's")
     ev.add_argument("--json", action="store_true", help="one-line JSON")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
     ev.set_defaults(fn=cmd_eval)
@@ -414,6 +439,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="soccer: what drives the other robots (default: the standing script)")
     v.add_argument("--drill", default=None, metavar="walk|empty-goal|getup",
                    help="soccer: a drill (as `legged drill`) played by the run's policy, or without a run by placo")
+    add_robot_option(v)
     v.add_argument("--save", default=None, metavar="FILE.npz",
                    help="record one rollout into FILE.npz and exit instead of serving")
     _add_server_options(v)

@@ -100,6 +100,13 @@ def join_negative_coordinates(argv: list[str]) -> list[str]:
     return out
 
 
+def add_robot_option(parser) -> None:
+    """--robot: the robot model a policy runs on."""
+    parser.add_argument("--robot", default="project", metavar="project|menagerie|playground|PATH.xml",
+                        help="the robot model the policy runs on: the project's (default), MuJoCo Menagerie's, MuJoCo "
+                             "Playground's (Go1) or an MJCF file of the same robot; actuators are set to the policy's")
+
+
 def add_physics_options(parser, default: str = "mjx") -> None:
     """--physics and --threads."""
     parser.add_argument("--physics", choices=["mjx", "native"], default=default,

@@ -20,7 +20,7 @@ def cmd_bench(args) -> int:
     default_config(args.task)  # unknown task -> clear error before any compilation
     progress = None if args.quiet else (lambda msg: print(f"[bench] {msg}", file=sys.stderr, flush=True))
     records = bench_env(args.task, args.batch, args.seconds, physics=args.physics, threads=args.threads or None,
-                        progress=progress)
+                        progress=progress, randomize=tuple(args.randomize))
     if args.peer_python:
         if progress:
             progress("running the Playground peer in the same run")
@@ -78,6 +78,9 @@ def add_bench_commands(sub) -> None:
     be.add_argument("--threads", type=THREADS, default=0, metavar="N",
                     help="threads of native physics (default: every core)")
     be.add_argument("--seconds", type=bounded(float, 0.0, 3600.0), default=3.0, help="timed seconds per batch size")
+    be.add_argument("--randomize", type=choices("default", "on", "off"), default=["default"],
+                    help="comma-separated: the task's default domain randomisation, or it on or off (on,off measures "
+                         "its cost: ratio_vs_off)")
     be.add_argument("--peer-python", default=None,
                     help="python of the MuJoCo Playground peer (../shared/peers); adds ratio_vs_peer")
     be.add_argument("--peer-script", default=None,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from legged.cli_args import SEED, add_physics_options, bounded, ints, xyz
+from legged.cli_args import SEED, add_physics_options, add_robot_option, bounded, ints, xyz
 
 
 def _print_records(records: list[dict], as_json: bool, print_table) -> int:
@@ -134,7 +134,7 @@ def cmd_navigate(args) -> int:
     from legged.worlds import generate_world
 
     policy_dir = shipped_policy(args.policy)
-    load_follower(policy_dir)  # a policy of another task fails before any sampling or planning
+    load_follower(policy_dir, args.robot, args.physics)  # a policy of another task or an unusable robot model fails first
     if args.scene:
         maps, start, goal = _scene_maps(args), np.array(args.start), np.array(args.goal)
         where = {"scene": args.scene}
@@ -151,7 +151,7 @@ def cmd_navigate(args) -> int:
         check_port(args.host, args.port)  # fail before the work
     try:
         report = navigate(policy_dir, maps, start, goal, args.physics, args.threads or None,
-                          planner=_planner_config(args), seed=args.seed,
+                          planner=_planner_config(args), seed=args.seed, robot=args.robot,
                           on_step=None if recording is None else recording.add)
     except Unreachable as exc:
         print(json.dumps(dict(where, success=False, reachable=False, error=str(exc))) if args.json
@@ -258,6 +258,7 @@ def add_navigation_commands(sub) -> None:
     nv.add_argument("--difficulty", type=bounded(int, 0, 20), default=0, help="generated world's level")
     nv.add_argument("--policy", default=None, help=f"a waypoint-follower run (default: {SHIPPED_FOLLOWER})")
     add_physics_options(nv, "native")
+    add_robot_option(nv)
     _add_planner_options(nv)
     nv.add_argument("--view", action="store_true", help="afterwards, show the navigation and its replans in the dashboard")
     nv.add_argument("--record", default=None, metavar="FILE", help="save the navigation as a trajectory (.npz)")

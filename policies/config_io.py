@@ -40,6 +40,8 @@ def _convert(kind, value, path: str):
             raise ConfigError(f"{path}: must be one of {typing.get_args(kind)}, got {value!r}")
         return value
     if origin in (typing.Union, types.UnionType):
+        if value is None and type(None) in typing.get_args(kind):
+            return None
         for option in typing.get_args(kind):
             if option is not type(None):
                 return _convert(option, value, path)

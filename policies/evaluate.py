@@ -39,6 +39,44 @@ def ood_config(env_config):
         push_velocity=1.5 * r.push_velocity))
 
 
+def on_robot(config, robot: str, physics: str | None = None):
+    """The run config `config` with its task's robot model chosen (`--robot`: project, a reference name or an
+    MJCF path; legged.robots.models), the model checked now (and that MJX runs it, for `physics` mjx); ValueError
+    naming the cause."""
+    from legged.robots.models import mjx_check, robot_model
+
+    if robot in ("", "project"):
+        return config
+    if not hasattr(config.env, "robot_model"):
+        raise ValueError(f"--robot {robot}: {config.task} runs on the project's {task_entry(config.task).robot.name} "
+                         f"model only")
+    spec = robot_model(task_entry(config.task).robot, robot, config.env.ctrl_dt)
+    if physics == "mjx":
+        mjx_check(spec)
+    return dataclasses.replace(config, env=dataclasses.replace(config.env, robot_model=robot))
+
+
+RATIO_FIGURES = ("tracking_error_mps", "fall_rate", "episode_return", "goals_for_per_episode",
+                 "goals_against_per_episode", "win_rate", "success_rate", "time_to_goal_s", "collisions_per_episode")
+"""The figures `legged eval --compare-robots` gives as ratios to the first robot model's."""
+
+
+def robot_ratios(reports: dict, first: str) -> dict:
+    """Each robot model's RATIO_FIGURES over the model `first`'s (confined tasks: per difficulty); None where the
+    first model's figure is 0 or missing."""
+    def ratios(mine: dict, base: dict) -> dict:
+        out = {}
+        for key, value in mine.items():
+            if isinstance(value, dict) and isinstance(base.get(key), dict):
+                out[key] = ratios(value, base[key])
+            elif key in RATIO_FIGURES and isinstance(value, (int, float)):
+                ref = base.get(key)
+                out[key] = round(value / ref, 4) if isinstance(ref, (int, float)) and ref else None
+        return {k: v for k, v in out.items() if v != {}}
+
+    return {name: ratios(report, reports[first]) for name, report in reports.items() if name != first}
+
+
 def estimate_errors(finals: list[dict]) -> dict:
     """A vision player that estimates the game: the RMS position errors of its estimate (metres) by part, averaged
     over the episodes, and `ball_near` (the ball when near, legged.soccer.learner.NEAR_BALL_M) pooled over the

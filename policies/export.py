@@ -76,20 +76,24 @@ def export_onnx(policy: Policy, path: str | Path, samples: int = 64, seed: int =
     try:
         session = onnxruntime.InferenceSession(str(tmp), providers=["CPUExecutionProvider"])
         policy.reset()
-        memory, gap = (module.initial_memory(samples).numpy() if recurrent else None), 0.0
+        memory, gap, largest = (module.initial_memory(samples).numpy() if recurrent else None), 0.0, 0.0
         for _ in range(3 if recurrent else 1):  # a model with memory: three steps, its memory carried
             groups = {g: draw(g) for g in policy.inputs}
             feeds = {n: groups[g] for n, g in zip(names, policy.inputs)} | ({"memory": memory} if recurrent else {})
             result = session.run(outputs, feeds)
             memory = result[-1] if recurrent else None
             gap = max(gap, float(np.abs(result[0] - policy.act(groups)).max()))
+            largest = max(largest, float(np.abs(result[0]).max()))
         policy.reset()
         if not gap <= PARITY_ATOL:
             raise ValueError(f"ONNX export of {policy.checkpoint} differs from the policy by {gap:.2e} "
                              f"(allowed {PARITY_ATOL:.0e}); {path} was left as it was")
+        if policy.action_bound is not None and largest > policy.action_bound + 1e-6:
+            raise ValueError(f"ONNX export of {policy.checkpoint} returns actions up to {largest:.3g}, outside its "
+                             f"+-{policy.action_bound:g}; {path} was left as it was")
         tmp.replace(path)
     finally:
         tmp.unlink(missing_ok=True)
     return {"onnx": str(path), "checkpoint": str(policy.checkpoint), "backend": policy.backend,
             "obs_size": policy.obs_size, "inputs": inputs, "outputs": outputs, "num_actions": policy.num_actions,
-            "max_abs_diff": gap, "samples": samples}
+            "max_abs_diff": gap, "samples": samples, "action_bound": policy.action_bound, "max_abs_action": largest}

@@ -55,9 +55,14 @@ class HistoryConv(torch.nn.Module):
     def forward(self, history: torch.Tensor) -> torch.Tensor:
         lead = history.shape[:-1]
         x = self.activation(self.embed(history.reshape(-1, self.steps, self.features)))  # [B, steps, channels]
+        exporting = torch.onnx.is_in_onnx_export()
         for conv, (kernel, stride, skip) in zip(self.convs, self.windows):
-            windows = x[:, skip:].unfold(1, kernel, stride)                            # [B, length, channels, kernel]
-            x = self.activation(conv(windows.reshape(*windows.shape[:2], -1)))
+            if exporting:  # ONNX has no Unfold: the same windows gathered by index (Gather), [B, length, kernel, C]
+                starts = torch.arange(skip, x.shape[1] - kernel + 1, stride)
+                windows = x[:, starts[:, None] + torch.arange(kernel)[None]].transpose(2, 3)
+            else:
+                windows = x[:, skip:].unfold(1, kernel, stride)                        # [B, length, channels, kernel]
+            x = self.activation(conv(windows.reshape(windows.shape[0], windows.shape[1], -1)))
         return self.output(x.flatten(1)).reshape(*lead, -1)
 
 

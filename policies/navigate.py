@@ -79,8 +79,10 @@ def terrain_of(maps: HeightMaps, start, goal) -> Terrain:
                    difficulties=np.array([0]), ceiling_top=float(np.max(maps.ceiling)), source="navigation scene")
 
 
-def load_follower(run_dir):
-    """(policy, run config) of a waypoint follower; NavigationError if the run learned another task."""
+def load_follower(run_dir, robot: str = "project", physics: str | None = None):
+    """(policy, run config with the `robot` model) of a waypoint follower; NavigationError if the run learned
+    another task, RobotModelError if the model cannot be used (in `physics`)."""
+    from policies.evaluate import on_robot
     from policies.run_dir import RunDir
 
     config = RunDir(run_dir).load_config()  # the task is checked before any checkpoint is read
@@ -88,21 +90,23 @@ def load_follower(run_dir):
     if entry.kind != "confined" or getattr(config.env, "mode", "") == "goal":
         raise NavigationError(f"{run_dir} was trained on {config.task}, which does not follow waypoints; it needs "
                               "a confined-waypoints (or confined-velocity / confined-skills) run")
-    return load_policy(run_dir)
+    on_robot(config, robot, physics)
+    policy, config = load_policy(run_dir)
+    return policy, on_robot(config, robot)
 
 
 def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", threads: int | None = None,
              config: NavigateConfig = NavigateConfig(), planner: PlannerConfig = PlannerConfig(), seed: int = 0,
-             on_step=None) -> dict:
+             on_step=None, robot: str = "project") -> dict:
     """Plan from start to goal, follow with the run's policy, replan on straying; the outcome as a dict.
     `on_step(env, state, plan)` is called at the start and after every control step but the last (viewers). Raises NavigationError (the
     policy cannot navigate, or the start or goal is unusable; Unreachable when no path exists) before any
-    compilation."""
-    policy, run_config = load_follower(run_dir)
-    robot = task_entry(run_config.task).robot
+    compilation. `robot`: the robot model the follower walks (legged.robots.models)."""
+    policy, run_config = load_follower(run_dir, robot, physics)
+    spec = task_entry(run_config.task).robot
     start, goal = np.asarray(start, float), np.asarray(goal, float)
     try:
-        plan = plan_path(maps, start, goal, robot, planner)
+        plan = plan_path(maps, start, goal, spec, planner)
     except PlanningError as exc:
         if "no collision-free path" in str(exc):
             raise Unreachable(f"the goal cannot be reached: {exc}") from None
@@ -111,7 +115,7 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
     time_limit = 20.0 + config.seconds_per_metre * plan.length_m
     env_config = dataclasses.replace(run_config.env, num_worlds=1, curriculum=False, spawn_yaw=0.0,
                                      episode_seconds=time_limit)
-    env = ConfinedEnv(env_config, robot, terrain_of(maps, start, goal),
+    env = ConfinedEnv(env_config, spec, terrain_of(maps, start, goal),
                       [plan.waypoints], path_capacity=PATH_CAPACITY)
     try:
         check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
@@ -143,7 +147,7 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
         stalled = (steps - last_progress_step) * env.dt > config.stall_seconds
         if (stray or stalled) and replans + failed_replans < config.max_replans:
             try:
-                plan = replan(maps, _pose_of(qpos), goal, robot, planner)
+                plan = replan(maps, _pose_of(qpos), goal, spec, planner)
             except PlanningError:
                 failed_replans += 1
                 last_progress_step = steps
@@ -160,7 +164,8 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
             "failed_replans": failed_replans, "path_length_m": round(first_plan.length_m, 4),
             "walked_m": round(walked, 4), "final_distance_m": round(final["final_distance_m"], 4),
             "planner": first_plan.planner, "plan_time_s": round(first_plan.plan_time_s, 4), "physics": physics,
-            "time_limit_s": round(time_limit, 2), "policy": str(policy.checkpoint)}
+            "time_limit_s": round(time_limit, 2), "policy": str(policy.checkpoint),
+            "robot": run_config.env.robot_model}
 
 
 def _hand_over(batch, waypoints: np.ndarray):

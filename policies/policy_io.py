@@ -47,6 +47,8 @@ class Policy:
     where the boolean array `done` is set; nothing for memoryless policies. Call it whenever episodes begin."""
     recurrent: bool = False
     """Whether `act` remembers earlier steps (policies.memory_models): then one batch of episodes at a time."""
+    action_bound: float | None = None
+    """Actions lie in +-this (the deployed actor clips them, as its environment does); None: unbounded."""
 
     @property
     def obs_size(self) -> int:
@@ -72,6 +74,25 @@ def build_actor(config: TrainConfig, obs_sizes: dict, num_actions: int):
     return cls(obs, {"actor": actor_inputs(config.algo, camera)}, "actor", num_actions, **kwargs)
 
 
+class BoundedActions(torch.nn.Module):
+    """A deployed actor whose actions are clipped to +-`bound`, the range its environment applies: part of the network,
+    so the ONNX model clips too."""
+
+    def __init__(self, module: torch.nn.Module, bound: float):
+        super().__init__()
+        self.module, self.bound = module, float(bound)
+
+    def forward(self, *inputs: torch.Tensor) -> torch.Tensor:
+        return torch.clamp(self.module(*inputs), -self.bound, self.bound)
+
+
+def action_bound(config: TrainConfig) -> float | None:
+    """The range of a run's actions (its environment's clip), or None where actions are not joint targets."""
+    from legged.tasks import task_entry
+
+    return float(config.env.action_clip) if task_entry(config.task).bounded_actions else None
+
+
 def _rsl_policy(config: TrainConfig, path: Path) -> Policy:
     from policies.algorithms import actor_inputs
     from policies.latent_models import deployed_actor, deployed_features
@@ -86,6 +107,9 @@ def _rsl_policy(config: TrainConfig, path: Path) -> Policy:
 
     if getattr(module, "is_recurrent", False):
         return _recurrent_policy(module, payload, path, inputs)
+    inner, bound = module, action_bound(config)
+    if bound is not None:
+        module = BoundedActions(inner, bound).eval()
 
     def act(obs) -> np.ndarray:
         with torch.inference_mode():
@@ -95,12 +119,12 @@ def _rsl_policy(config: TrainConfig, path: Path) -> Policy:
 
     def features(obs: dict) -> np.ndarray | None:
         with torch.inference_mode():
-            out = deployed_features(module, *(_tensor(obs[k]) for k in inputs))
+            out = deployed_features(inner, *(_tensor(obs[k]) for k in inputs))
         return None if out is None else out.numpy()
 
     return Policy(act=act, backend="rsl", step=payload["step"], obs_sizes=payload["obs_sizes"],
                   num_actions=payload["num_actions"], checkpoint=path, torch_module=module, inputs=inputs,
-                  features=features)
+                  features=features, action_bound=bound)
 
 
 def _recurrent_policy(module, payload: dict, path: Path, inputs: tuple[str, ...]) -> Policy:
@@ -148,7 +172,8 @@ def _brax_policy(config: TrainConfig, path: Path) -> Policy:
         return np.asarray(inference(full, key)[0])
 
     return Policy(act=act, backend="brax", step=payload["step"], obs_sizes=sizes,
-                  num_actions=payload["num_actions"], checkpoint=path, brax_params=(params[0], params[1]))
+                  num_actions=payload["num_actions"], checkpoint=path, brax_params=(params[0], params[1]),
+                  action_bound=1.0)  # Brax's deterministic policy is the tanh of its mean
 
 
 def actor_observation(obs: dict, inputs: tuple[str, ...] = ("state",)):

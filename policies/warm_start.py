@@ -1,6 +1,7 @@
 """Warm start: begin a PPO run from the networks of a trained run of another task (e.g. the confined
 follower from the go1-flat walker), or of the same task (its networks as they are, e.g. to go on with new
-rewards).
+rewards; through the layouts when its observations grew, e.g. by the randomisation's draws in the privileged
+state).
 
 The two tasks' observations differ, so the first layer is rebuilt input by input from the observations'
 named layouts (`LeggedEnv.observation_layout`): an input both tasks have keeps its weights and its
@@ -91,8 +92,8 @@ def source_layout(run_path: Path) -> tuple[dict, Path]:
 
 def same_task_start(alg, run_path: Path, task: str) -> str | None:
     """Load the latest actor and critic (normalisers and action noise included) of `run_path` into `alg` as they
-    are, if that run trained `task` with rsl-rl (a new run of the same task, e.g. with other rewards); None if
-    it trained another task. Returns a summary."""
+    are, if that run trained `task` with rsl-rl on observations of the same sizes (a new run of the same task, e.g.
+    with other rewards); None if it trained another task or other observations. Returns a summary."""
     from policies.rsl_backend import load_checkpoint
 
     run = RunDir(Path(run_path))
@@ -102,6 +103,8 @@ def same_task_start(alg, run_path: Path, task: str) -> str | None:
     path = run.latest_checkpoint()
     saved = load_checkpoint(path)["alg"]
     for net, key in ((alg.actor, "actor_state_dict"), (alg.critic, "critic_state_dict")):
+        if saved[key]["mlp.0.weight"].shape[1] != net.state_dict()["mlp.0.weight"].shape[1]:
+            return None  # its observations changed (e.g. the randomisation grew the privileged state): by layout
         try:
             net.load_state_dict(saved[key])
         except RuntimeError as e:

@@ -7,6 +7,7 @@ import pytest
 
 import legged  # noqa: F401  (quiet MJX import)
 from legged.tasks import make
+from legged.envs.config import NoiseConfig, RandomizationConfig
 from legged.envs.confined import ConfinedConfig, ConfinedEnv
 from legged.envs.physics import view_of_mjx
 from legged.worlds import Terrain, generate_world
@@ -82,13 +83,15 @@ class Compiled:
 
 @pytest.fixture(scope="session")
 def flat():
-    return Compiled(make("go1-flat"))
+    """go1-flat on the nominal model: no randomisation, no observation noise (the task trains with both)."""
+    return Compiled(make("go1-flat", randomization=RandomizationConfig(), noise=NoiseConfig()))
 
 
 @pytest.fixture(scope="session")
 def confined():
     terrain = Terrain.from_worlds([generate_world(11, 0), generate_world(12, 2)])
-    return Compiled(ConfinedEnv(ConfinedConfig(mode="waypoints"), terrain=terrain))
+    return Compiled(ConfinedEnv(ConfinedConfig(mode="waypoints", randomization=RandomizationConfig(),
+                                               noise=NoiseConfig()), terrain=terrain))
 
 
 @pytest.fixture(scope="session", autouse=True)

@@ -19,9 +19,10 @@ from policies.run_dir import RunDir
 
 H = 3
 """History steps of these tests' students."""
-SIZES = {"state": 45, "privileged_state": 114, "history": 45 * H}
+SIZES = {"state": 45, "privileged_state": 154, "history": 45 * H}
 LAYOUT = {"privileged_state": [("state", 45), ("base_lin_vel", 3), ("base_ang_vel", 3), ("contact_forces", 7),
-                               ("dynamics", 4), ("com", 3), ("motor_strength", 12), ("task", 37)]}
+                               ("dynamics", 4), ("com", 3), ("motor_strength", 12), ("task", 37),
+                               ("model_dynamics", 40)]}
 TINY = ["ppo.actor_hidden=[32, 32]", "ppo.critic_hidden=[32, 32]", "latent.encoder_hidden=[32]", "latent.latent_dim=4",
         f"latent.history_steps={H}", "ppo.num_steps_per_env=4", "ppo.num_mini_batches=2", "latent.infonce_samples=16"]
 
@@ -33,8 +34,11 @@ def config(algo: str, **changes) -> TrainConfig:
 def observations(n: int, rng: np.random.Generator, dynamics: np.ndarray | None = None) -> TensorDict:
     groups = {k: torch.as_tensor(rng.normal(size=(n, size)), dtype=torch.float32) for k, size in SIZES.items()}
     if dynamics is not None:  # the randomised parameters of each environment's episode
-        start, stop = privileged_slices(LAYOUT)[0].start, privileged_slices(LAYOUT)[-1].stop
-        groups["privileged_state"][:, start:stop] = torch.as_tensor(dynamics, dtype=torch.float32)
+        at = 0
+        for part in privileged_slices(LAYOUT):  # each entry of the randomised parameters, in order
+            width = part.stop - part.start
+            groups["privileged_state"][:, part] = torch.as_tensor(dynamics[:, at:at + width], dtype=torch.float32)
+            at += width
     groups[NOISE_GROUP] = torch.as_tensor(rng.normal(size=(n, 4)), dtype=torch.float32)
     return TensorDict(groups, batch_size=[n])
 
@@ -104,7 +108,7 @@ def test_ppo_algorithms_update_on_synthetic_rollouts(algo):
     cfg = config(algo)
     rng = np.random.default_rng(1)
     n = 8
-    dynamics = rng.normal(size=(n, 19))
+    dynamics = rng.normal(size=(n, 19 + 40))
     alg = build_algorithm(cfg, observations(n, rng, dynamics), n, 12, "cpu")
     if algo.startswith("hib"):
         attach_information_bottleneck(alg, cfg, LAYOUT, seed=0)

@@ -106,7 +106,9 @@ def test_warm_start_from_the_same_task_copies_every_weight():
     network of other sizes is refused, naming the settings to use."""
     from policies.run_dir import RunDirError
 
-    sizes = make("go1-flat").observation_dims()
+    from legged.envs.config import NoiseConfig, RandomizationConfig
+
+    sizes = make("go1-flat", randomization=RandomizationConfig(), noise=NoiseConfig()).observation_dims()  # the walker's
     obs = dummy_observations(sizes, 8)
     ppo = PPOConfig(actor_hidden=(128, 128, 128), critic_hidden=(128, 128, 128))
     new = build_ppo(obs, 8, 12, ppo, "cpu")
@@ -118,6 +120,25 @@ def test_warm_start_from_the_same_task_copies_every_weight():
             assert torch.equal(value, payload[key][name]), name
     with pytest.raises(RunDirError, match="ppo.actor_hidden"):
         warm_start(build_ppo(obs, 8, 12, PPOConfig(actor_hidden=(64, 64)), "cpu"), WALKER, None, obs, "go1-flat")
+
+
+def test_warm_start_of_the_same_task_with_randomisation_draws_keeps_the_policy():
+    """go1-flat as it now trains (the randomisation's draws appended to the privileged state) from the walker trained
+    without: the actor is copied whole, the critic's old inputs keep their weights and the new ones start at zero."""
+    env = make("go1-flat")
+    sizes = env.observation_dims()
+    obs = dummy_observations(sizes, 8)
+    ppo = PPOConfig(actor_hidden=(128, 128, 128), critic_hidden=(128, 128, 128))
+    new = build_ppo(obs, 8, 12, ppo, "cpu")
+    note = warm_start(new, WALKER, env, obs, "go1-flat")
+    assert "42 of 42" in note and f"74 of {sizes['privileged_state']}" in note, note
+    payload = torch.load(sorted((WALKER / "checkpoints").glob("*.pt"))[-1], weights_only=True)["alg"]
+    for name, value in new.actor.state_dict().items():
+        if name != "obs_normalizer.count":
+            assert torch.equal(value, payload["actor_state_dict"][name]), name
+    first = new.critic.state_dict()["mlp.0.weight"]
+    assert torch.equal(first[:, :74], payload["critic_state_dict"]["mlp.0.weight"])
+    assert torch.count_nonzero(first[:, 74:]) == 0
 
 
 def test_navigation_geometry():

@@ -17,7 +17,7 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from tests.menagerie import menagerie_model  # noqa: E402
+from tests.menagerie import check_differences, menagerie_model  # noqa: E402
 from legged.robots import GO1  # noqa: E402
 
 # --- Tolerances ---------------------------------------------------------------------------------
@@ -174,3 +174,9 @@ def test_standing_height_at_default_pose(ours, ref):
     default pose agrees within ``STANDING_HEIGHT_ATOL``."""
     h_o, h_r = _standing_height(ours), _standing_height(ref)
     assert abs(h_o - h_r) <= STANDING_HEIGHT_ATOL, f"standing height: ours {h_o:.4f} m, menagerie {h_r:.4f} m"
+
+
+def test_dynamics_differ_only_where_the_spec_says_why(ours, ref):
+    """Joint damping, armature and friction loss, foot and trunk contact, actuator gains and limits, solver and
+    time step equal Menagerie's, except the quantities `GO1.differences` names with a reason (which must differ)."""
+    check_differences(ours, ref, GO1)

@@ -20,7 +20,7 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from tests.menagerie import menagerie_model  # noqa: E402
+from tests.menagerie import check_differences, menagerie_model  # noqa: E402
 from legged.robots import OP3
 from legged.robots.op3 import OP3_CTRL_DT
 
@@ -313,3 +313,9 @@ def test_mjx_step_matches_native(scene):
         mujoco.mj_step(scene, data)
     gap = np.abs(np.asarray(mjx_data.qpos) - data.qpos).max()
     assert gap <= MJX_QPOS_ATOL, f"MJX vs native qpos gap {gap:.2e} after {MJX_STEPS} steps"
+
+
+def test_dynamics_differ_only_where_the_spec_says_why(ours, ref):
+    """Joint damping, armature and friction loss, foot and trunk contact, actuator gains and limits, solver and
+    time step equal Menagerie's, except the quantities `OP3.differences` names with a reason (which must differ)."""
+    check_differences(ours, ref, OP3)

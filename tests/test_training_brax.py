@@ -131,11 +131,13 @@ def test_brax_backend_tiny_run_resume_and_export(tmp_path, monkeypatch):
 
 
 def test_the_committed_go1_brax_run_loads_acts_and_exports(tmp_path):
-    """The Go1 run trained with this backend fits today's go1-flat task, acts, and exports with parity."""
+    """The Go1 run trained with this backend fits go1-flat as it trained it (its own saved config), acts, and
+    exports with parity, its actions inside the tanh's bound."""
     policy, config = load_policy(GO1_BRAX_RUN)
     assert config.backend == "brax" and policy.backend == "brax"
-    env = make("go1-flat")
+    env = make("go1-flat", config.env)
     assert policy.obs_sizes == env.observation_dims() and policy.num_actions == env.action_size
     actions = policy.act(np.zeros((3, policy.obs_sizes["state"]), np.float32))
     assert actions.shape == (3, env.action_size) and np.all(np.isfinite(actions))
-    assert export_onnx(policy, tmp_path / "go1.onnx")["max_abs_diff"] <= 1e-4
+    check = export_onnx(policy, tmp_path / "go1.onnx")
+    assert check["max_abs_diff"] <= 1e-4 and check["action_bound"] == 1.0 and check["max_abs_action"] <= 1.0 + 1e-6

@@ -48,6 +48,8 @@ class ViewRequest:
     drill: str | None = None
     """A soccer drill (walk, empty-goal, getup; legged.soccer.drills) played by the run's policy, or without a
     run by the placo player."""
+    robot: str = "project"
+    """The robot model the rollouts run (legged.robots.models): project, a reference name or an MJCF path."""
 
 
 def check_port(host: str, port: int) -> None:
@@ -183,6 +185,12 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
         if config is not None and config.drill:
             raise ValueError(f"run {run_dir} trained on the {config.drill} drill, where nobody else plays: "
                              f"drop --opponent")
+    if request.robot not in ("", "project"):
+        from policies.config import TrainConfig
+        from policies.evaluate import on_robot
+
+        config = on_robot(config if config is not None else TrainConfig(task=task).resolved(), request.robot,
+                          request.physics)
     policy = None
     if run_dir is not None and (request.checkpoint is not None or _has_checkpoints(run_dir)):
         policy = _load_policy(run_dir, request.checkpoint, log)

@@ -44,7 +44,8 @@ class MjxEnv(Env, abc.ABC):
 
     @abc.abstractmethod
     def prepare(self, state: State, action: jax.Array, *args) -> tuple[jax.Array, jax.Array]:
-        """(ctrl for physics, actions as `transition` sees them) for a control step."""
+        """(ctrl for physics, actions as `transition` sees them) for a control step: ctrl (nu,) for the whole step,
+        or a schedule (n_substeps, nu) with one row per physics step."""
 
     @abc.abstractmethod
     def transition(self, state: State, view: PhysicsView, actions: jax.Array) -> State:
@@ -122,8 +123,11 @@ class MjxEnv(Env, abc.ABC):
         ctrl, actions = self.prepare(state, action, *args)
         model = self.mjx_model_for(state.info)
         previous = state.pipeline_state
-        data = jax.lax.scan(lambda d, _: (mjx.step(model, d), None), previous.replace(ctrl=ctrl), None,
-                            length=self.config.n_substeps)[0]
+        if ctrl.ndim == 2:  # a schedule: one row of controls per physics step (e.g. action latency)
+            data = jax.lax.scan(lambda d, c: (mjx.step(model, d.replace(ctrl=c)), None), previous, ctrl)[0]
+        else:
+            data = jax.lax.scan(lambda d, _: (mjx.step(model, d), None), previous.replace(ctrl=ctrl), None,
+                                length=self.config.n_substeps)[0]
         bad, data = reject_divergence(data, previous, self.config.divergence_qvel)
         nxt = self.advance(state, view_of_mjx(data, self.contact_forces(data), bad, self.uses_cameras), actions)
         moved = nxt.pipeline_state

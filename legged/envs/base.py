@@ -9,6 +9,8 @@ are the same code whether physics runs in MJX (`reset`/`step`, legged.envs.api) 
 from __future__ import annotations
 
 import abc
+import dataclasses
+import functools
 
 import jax
 import jax.numpy as jnp
@@ -23,53 +25,29 @@ from legged.envs.contacts import MjxContactReader
 from legged.envs.physics import PhysicsView, Spawn
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
 from legged.envs.rewards import penalty_terms
+from legged.envs.randomize import MODEL_DR, draw, randomized_fields
+from legged.robots.models import mjx_model_of, robot_model
 from legged.robots.spec import RobotSpec
 from legged.sensors.heightscan import surface_height
 from legged.worlds.mjcf import SceneOptions, compile_scene
 from legged.worlds.terrain import Terrain
 
 
-def randomized_fields(base: dict, dr: dict, trunk: int, xp=jnp) -> dict:
-    """Model fields after applying randomisation parameters `dr` to the nominal fields `base`.
-
-    One function for both engines: jax.numpy for MJX models (per environment, under vmap) and numpy for
-    native ones, where `dr` may carry a leading batch axis (one row per simulation).
-    """
-    scale = dr["mass_scale"]                                       # [..., nbody]
-    is_trunk = xp.arange(scale.shape[-1]) == trunk
-    mass = base["body_mass"] * scale
-    mass_trunk = mass[..., trunk] + dr["base_mass"]
-    ratio = xp.where(is_trunk, (mass_trunk / mass[..., trunk])[..., None], 1.0)
-    inertia = base["body_inertia"] * (scale * ratio)[..., None]
-    mass = xp.where(is_trunk, mass_trunk[..., None], mass)
-    ipos = base["body_ipos"] + is_trunk[:, None] * xp.asarray(dr["com"])[..., None, :]
-    pairs = base["pair_friction"]
-    friction = xp.concatenate([xp.broadcast_to(xp.asarray(dr["friction"])[..., None, None], mass.shape[:-1] + (len(pairs), 2)),
-                               xp.broadcast_to(pairs[:, 2:], mass.shape[:-1] + pairs[:, 2:].shape)], axis=-1)
-    gain0, bias0 = base["actuator_gainprm"], base["actuator_biasprm"]
-    strength = dr["strength"]                                      # [..., nu]
-    kp = gain0[:, 0] * xp.asarray(dr["kp"])[..., None] * strength
-    kd = -bias0[:, 2] * xp.asarray(dr["kd"])[..., None] * strength
-    lead = strength.shape[:-1]
-    gain = xp.concatenate([kp[..., None], xp.broadcast_to(gain0[:, 1:], lead + gain0[:, 1:].shape)], axis=-1)
-    bias = xp.concatenate([xp.broadcast_to(bias0[:, :1], lead + (len(bias0), 1)), -kp[..., None], -kd[..., None],
-                           xp.broadcast_to(bias0[:, 3:], lead + bias0[:, 3:].shape)], axis=-1)
-    return dict(body_mass=mass, body_inertia=inertia, body_ipos=ipos, pair_friction=friction,
-                actuator_gainprm=gain, actuator_biasprm=bias)
-
-
 class LeggedEnv(MjxEnv, abc.ABC):
     """A Brax-compatible MJX environment for one legged robot on a terrain."""
 
     def __init__(self, robot: RobotSpec, terrain: Terrain, scene: SceneOptions, config: EnvConfig):
+        robot = robot_model(robot, config.robot_model, config.ctrl_dt)
+        if robot.timestep is not None:  # the model's own physics step (a whole number per control step)
+            config = dataclasses.replace(config, sim_dt=robot.timestep)
         self.robot, self.terrain, self.config, self.scene = robot, terrain, config, scene
         self.n_substeps = config.n_substeps
         self.mj_model = compile_scene(terrain, robot, scene)
         self.mj_model.opt.timestep = config.sim_dt
-        self.mjx_model = mjx.put_model(self.mj_model)
         m = self.mj_model
         joints = [m.joint(n) for n in robot.joint_names]
         self._qadr = np.array([m.jnt_qposadr[j.id] for j in joints])
+        self._joint_range = np.array([m.jnt_range[j.id] for j in joints])
         self._vadr = np.array([m.jnt_dofadr[j.id] for j in joints])
         if list(m.actuator_trnid[:, 0]) != [j.id for j in joints]:
             raise ValueError(f"{robot.mjcf_path}: actuators must drive {robot.joint_names} in that order")
@@ -78,13 +56,21 @@ class LeggedEnv(MjxEnv, abc.ABC):
         self._ctrl_range = jnp.asarray(m.actuator_ctrlrange, jnp.float32)
         self._feet = np.array([m.geom(g).id for g in robot.feet_geoms])
         self._body_geoms = np.array([m.geom(g).id for g in robot.body_geoms])
-        self._calf_bodies = np.array([m.geom_bodyid[m.geom(g).id] for g in robot.calf_geoms])
-        self._contacts = MjxContactReader(m, self.mjx_model, np.concatenate([self._feet, self._body_geoms]))
+        self._calf_bodies = np.array(list(dict.fromkeys(m.geom_bodyid[m.geom(g).id] for g in robot.calf_geoms)))
+        # A model whose trunk has other collision geoms than the project's pools their forces into the project's
+        # trunk slots, so that observations keep their size on every model (RobotSpec.body_slots).
+        self._body_pool = None
+        if robot.body_slots:
+            self._body_pool = jnp.asarray(np.eye(robot.num_body_slots, dtype=np.float32)[list(robot.body_slots)])
         self._floor = jnp.asarray(terrain.floor)
         self._ceiling = jnp.asarray(terrain.ceiling)
         self._origin = jnp.asarray(terrain.origin, jnp.float32)
         self._base_fields = {k: jnp.asarray(getattr(m, k)) for k in (
-            "body_mass", "body_inertia", "body_ipos", "pair_friction", "actuator_gainprm", "actuator_biasprm")}
+            "body_mass", "body_inertia", "body_ipos", "pair_friction", "actuator_gainprm", "actuator_biasprm",
+            "dof_damping", "dof_armature", "dof_frictionloss", "pair_solref", "pair_solimp", "pair_margin")}
+        self._base_fields["joint_dofs"] = jnp.asarray(np.eye(m.nv, dtype=np.float32)[self._vadr])
+        self._base_fields["foot_pairs"] = jnp.asarray(np.isin(m.pair_geom1, self._feet) | np.isin(m.pair_geom2, self._feet),
+                                                      jnp.float32)
         self._weight = float(m.body_subtreemass[self._trunk] * 9.81)
         self._foot_bodies = np.array(m.geom_bodyid[self._feet])
         self._foot_offsets = jnp.asarray(m.geom_pos[self._feet], jnp.float32)
@@ -94,6 +80,17 @@ class LeggedEnv(MjxEnv, abc.ABC):
         if push.push_interval_s < 0 or push.push_velocity < 0:
             raise ValueError(f"push_interval_s and push_velocity must be >= 0, got {push.push_interval_s} and "
                              f"{push.push_velocity}")
+
+    @functools.cached_property
+    def mjx_model(self):
+        """The model in MJX, built on first use (native physics never needs it); an error naming the cause
+        for a robot model MJX cannot run (RobotModelError)."""
+        with jax.ensure_compile_time_eval():  # concrete arrays even when first needed inside a traced function
+            return mjx_model_of(self.mj_model, self.robot)
+
+    @functools.cached_property
+    def _contacts(self) -> MjxContactReader:
+        return MjxContactReader(self.mj_model, self.mjx_model, np.concatenate([self._feet, self._body_geoms]))
 
     # ----------------------------------------------------------------- task hooks
     @abc.abstractmethod
@@ -180,17 +177,11 @@ class LeggedEnv(MjxEnv, abc.ABC):
 
     # ----------------------------------------------------------------- randomisation and physics
     def randomize(self, rng: jax.Array) -> dict:
-        """Sample dynamics randomisation parameters (nominal values when disabled)."""
-        c, nb, nu = self.config.randomization, self.mj_model.nbody, self.mj_model.nu
-        if not c.enabled:
-            return dict(friction=jnp.float32(self._base_fields["pair_friction"][0, 0]), mass_scale=jnp.ones(nb),
-                        base_mass=jnp.float32(0.0), com=jnp.zeros(3), strength=jnp.ones(nu),
-                        kp=jnp.float32(1.0), kd=jnp.float32(1.0))
-        k = jax.random.split(rng, 7)
-        u = lambda key, r, shape=(): jax.random.uniform(key, shape, minval=r[0], maxval=r[1])
-        return dict(friction=u(k[0], c.friction), mass_scale=u(k[1], c.link_mass_scale, (nb,)),
-                    base_mass=u(k[2], c.base_mass_offset), com=u(k[3], (-c.com_offset, c.com_offset), (3,)),
-                    strength=u(k[4], c.motor_strength, (nu,)), kp=u(k[5], c.kp_scale), kd=u(k[6], c.kd_scale))
+        """Sample dynamics randomisation parameters (legged.envs.randomize.draw)."""
+        m = self.mj_model
+        nominal_friction = self._base_fields["pair_friction"][0, 0]
+        return draw(self.config.randomization, rng, m.nbody, m.nu, self.config.sim_dt, self.n_substeps,
+                    nominal_friction)
 
     def model_with(self, dr: dict):
         """The MJX model with randomisation `dr` applied (the nominal model when disabled)."""
@@ -226,6 +217,14 @@ class LeggedEnv(MjxEnv, abc.ABC):
         model.opt.timestep = self.config.sim_dt
         return model
 
+    def slot_forces(self, forces: jax.Array) -> jax.Array:
+        """Watched-geom normal forces (feet, then trunk geoms) as the observations hold them: feet, then the trunk
+        geoms pooled into the project model's trunk slots where the model's differ."""
+        if self._body_pool is None:
+            return forces
+        n = len(self._feet)
+        return jnp.concatenate([forces[..., :n], forces[..., n:] @ self._body_pool], -1)
+
     def contact_forces(self, data) -> jax.Array:
         """Normal contact force on each foot, then on each body geom (N), of an MJX data."""
         return self._contacts(data)
@@ -249,18 +248,25 @@ class LeggedEnv(MjxEnv, abc.ABC):
         return State(view, obs, jnp.float32(0.0), jnp.float32(0.0), metrics, info)
 
     def prepare(self, state: State, action: jax.Array) -> tuple[jax.Array, jax.Array]:
-        return self.joint_targets(action), action
+        """Joint targets for the control step; with action latency, a schedule (n_substeps, nu) whose first
+        `latency` physics steps keep the previous targets."""
+        targets = self.joint_targets(action)
+        latency = state.info["dr"].get("latency")
+        if latency is None:
+            return targets, action
+        late = jnp.arange(self.n_substeps)[:, None] < latency
+        return jnp.where(late, state.pipeline_state.ctrl, targets), action
 
     # ----------------------------------------------------------------- shared transition
     def transition(self, state: State, data: PhysicsView, action: jax.Array) -> State:
         """Next State from the view of stepped physics (MJX or native); pure and jittable."""
         cfg = self.config
         bad = data.diverged
-        forces = jnp.where(bad, 0.0, data.contact_force)
+        forces = jnp.where(bad, 0.0, self.slot_forces(data.contact_force))
         info = dict(state.info)
         info["rng"], k_noise, k_push = jax.random.split(info["rng"], 3)
         info["step"] = info["step"] + 1
-        action = jnp.where(bad, 0.0, action)
+        action = jnp.where(bad, 0.0, jnp.clip(action, -cfg.action_clip, cfg.action_clip))  # the action applied
         if self.pushes:
             data, info["teleported"] = self._push(data, info, k_push)
 
@@ -302,7 +308,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
 
     def _penalties(self, data, info, action, qd, collisions) -> dict:
         """Penalty terms shared by all tasks (scales from the task config's `penalties`)."""
-        return penalty_terms(self.penalty_scales, self.joint_angles(data), self.mj_model.jnt_range[1:], qd,
+        return penalty_terms(self.penalty_scales, self.joint_angles(data), self._joint_range, qd,
                              info["last_qvel"], self.dt, data.actuator_force, action, info["last_action"], collisions)
 
     @property
@@ -330,10 +336,13 @@ class LeggedEnv(MjxEnv, abc.ABC):
                   ("exteroception", ext, ext_noise)]
         dr = info["dr"]
         privileged = [("base_lin_vel", rotate_inv(rot, data.qvel[0:3])), ("base_ang_vel", data.qvel[3:6]),
-                      ("contact_forces", data.contact_force / self._weight),
+                      ("contact_forces", self.slot_forces(data.contact_force) / self._weight),
                       ("dynamics", jnp.stack([dr["friction"], dr["base_mass"], dr["kp"], dr["kd"]])),
                       ("com", dr["com"]), ("motor_strength", dr["strength"]),
                       ("task", self._task_privileged(data, info))]
+        drawn = [jnp.atleast_1d(dr[k]).astype(jnp.float32) for k in MODEL_DR if k in dr]
+        if drawn:  # the model randomisation, where a run draws it (after the older entries, which keep their place)
+            privileged.append(("model_dynamics", jnp.concatenate(drawn)))
         return state, privileged
 
     def _observe(self, data: PhysicsView, info, rng) -> tuple[dict, dict]:
@@ -341,7 +350,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
         states, kept in info['history']; a new episode's history repeats its first state)."""
         state_parts, privileged_parts = self._observation_parts(data, info)
         clean = jnp.concatenate([v for _, v, _ in state_parts])
-        state = clean
+        state = clean + self._sensor_bias(state_parts, info["dr"])
         if self.config.noise.enabled:
             scales = jnp.concatenate([n for _, _, n in state_parts])
             state = clean + scales * jax.random.uniform(rng, clean.shape, minval=-1, maxval=1)
@@ -356,13 +365,43 @@ class LeggedEnv(MjxEnv, abc.ABC):
             obs["history"] = history.reshape(-1)
         return obs, info
 
+    @staticmethod
+    def _sensor_bias(state_parts: list, dr: dict) -> jax.Array | float:
+        """The episode's constant sensor biases laid out like `state`: encoder offsets on the joint angles, the
+        IMU's on the projected gravity and the angular velocity (0. where none is drawn)."""
+        biased = {"joint_pos": "encoder_offset", "gravity": "gravity_bias", "gyro": "gyro_bias"}
+        if not any(biased[n] in dr for n, _, _ in state_parts if n in biased):
+            return 0.0
+        return jnp.concatenate([dr[biased[n]] if biased.get(n) in dr else jnp.zeros_like(v) for n, v, _ in state_parts])
+
+    def _spawned_view(self, rng: jax.Array) -> tuple[PhysicsView, dict]:
+        """(view, info) of a spawned episode with zeros for every derived field: its shapes, for tracing
+        observations without an engine (native-only robot models have no MJX model)."""
+        spawn = self.spawn(rng)
+        m = self.mj_model
+        view = PhysicsView(qpos=spawn.qpos, qvel=spawn.qvel, ctrl=spawn.ctrl, xpos=jnp.zeros((m.nbody, 3)),
+                           xmat=jnp.zeros((m.nbody, 3, 3)), actuator_force=jnp.zeros(m.nu),
+                           contact_force=jnp.zeros(len(self.watched_geoms)), diverged=jnp.bool_(False))
+        return view, spawn.info
+
+    @property
+    def observation_size(self) -> dict:
+        """Shape of each observation (traced once from a spawned episode, without compiling or an engine)."""
+        if self.__dict__.get("_obs_size") is None:
+            def first(rng):
+                view, info = self._spawned_view(rng)
+                return self.start_episode(view, info, rng).obs
+            shapes = jax.eval_shape(first, jax.random.PRNGKey(0))
+            self._obs_size = {k: v.shape for k, v in shapes.items()}
+        return self._obs_size
+
     def observation_layout(self) -> dict:
         """Named slices of each observation: {"state": [(name, size), ...], "privileged_state": [...]}
         (the privileged one begins with the clean `state`), traced without compiling."""
         if self.__dict__.get("_layout") is None:
             names = {}
             def sizes(key):
-                view, info, _ = self.spawned_mjx(key)
+                view, info = self._spawned_view(key)
                 parts, privileged = self._observation_parts(view, info)
                 names["state"] = [n for n, _, _ in parts]
                 names["privileged"] = [n for n, _ in privileged]

@@ -25,11 +25,48 @@ class RandomizationConfig:
     """Range of the scale of the proportional gain (all joints together)."""
     kd_scale: tuple[float, float] = (0.75, 1.25)
     """Range of the scale of the derivative gain (all joints together)."""
+    joint_damping: tuple[float, float] | None = None
+    """Range of each actuated joint's passive damping, N m s/rad, drawn per joint (None: the model's own)."""
+    joint_armature: tuple[float, float] | None = None
+    """Range of each actuated joint's armature (rotor inertia), kg m^2, drawn per joint (None: the model's own)."""
+    joint_frictionloss: tuple[float, float] | None = None
+    """Range of each actuated joint's dry friction, N m, drawn per joint (None: the model's own)."""
+    contact_softness: tuple[float, float] | None = None
+    """Range of the feet's contact softness s: solimp = (1 - s) * MuJoCo's default + s * SOFT_SOLIMP, from the plain
+    contact (0) to the soft feet of MuJoCo Menagerie's Go1 (1) (None: the model's own)."""
+    contact_timeconst: tuple[float, float] | None = None
+    """Range of the feet's contact time constant (solref[0]), seconds (None: the model's own)."""
+    contact_margin: tuple[float, float] | None = None
+    """Range of the feet's contact margin, metres (None: the model's own)."""
+    latency_s: tuple[float, float] | None = None
+    """Range of the action latency, seconds, drawn in whole physics steps: for that long after a control step begins
+    the previous joint targets still act (None: none)."""
+    encoder_offset: float = 0.0
+    """Each joint's angle reads off by a constant uniform in +-this for the episode, radians (0: none)."""
+    imu_bias: tuple[float, float] = (0.0, 0.0)
+    """Constant biases of the IMU for the episode, uniform in +-these per axis: on the projected gravity (unitless)
+    and on the angular velocity (rad/s)."""
     push_interval_s: float = 8.0
     """Seconds between random pushes of the body (0: no pushes); every environment is pushed at the same steps
     of its episode."""
     push_velocity: float = 0.5
     """A push adds a horizontal velocity uniform in +-this per axis to the body, m/s."""
+
+
+SOFT_SOLIMP = (0.015, 1.0, 0.023, 0.5, 2.0)
+"""solimp of the feet of MuJoCo Menagerie's Go1: the soft end of `RandomizationConfig.contact_softness`."""
+
+COVERING = dict(joint_damping=(0.3, 2.5), joint_armature=(0.004, 0.02), joint_frictionloss=(0.1, 1.2),
+                contact_softness=(0.0, 1.0), contact_timeconst=(0.01, 0.03), contact_margin=(0.0, 0.002),
+                latency_s=(0.0, 0.02), encoder_offset=0.02, imu_bias=(0.03, 0.05))
+"""Ranges of the model randomisation that covers every reference model of the Go1 (the project's, MuJoCo Menagerie's
+and MuJoCo Playground's: damping 0.5-2, armature 0.005-0.01, friction loss 0.2-1.0, plain to soft feet with 0-1 mm of
+margin; legged.robots.models), with up to 20 ms of action latency and small sensor biases. The Go1 tasks train with
+them by default (GO1_RANDOMIZATION); runs saved before they existed load without."""
+
+
+GO1_RANDOMIZATION = RandomizationConfig(enabled=True, **COVERING)
+"""The Go1 tasks' default randomisation: the earlier ranges, and the model ranges that cover the reference robots."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -72,12 +109,15 @@ class EnvConfig:
     """Clip each step's total reward at 0 (legged_gym's rule): then an early fall can never pay by ending
     a stream of penalties, and the penalties still shape what the policy does while it earns reward."""
     randomization: RandomizationConfig = RandomizationConfig()
-    """Domain randomisation."""
+    """Domain randomisation (the Go1 tasks turn it on, with the ranges that cover the reference models: COVERING)."""
     noise: NoiseConfig = NoiseConfig()
-    """Observation noise."""
+    """Observation noise (the Go1 tasks turn it on)."""
     gyro_in_state: bool = False
     """`state` also holds the IMU's angular velocity (body frame; right after the projected gravity), as a real
     robot measures it. Off for the tasks whose shipped policies were trained without it; on for go1-rough."""
+    robot_model: str = "project"
+    """Which model of the task's robot the physics runs: project (assets/robots), a reference (menagerie, playground)
+    or an MJCF file of the same robot (legged.robots.models; `--robot` on eval, drill, navigate and view)."""
     history_steps: int = 0
     """When > 0, the observation `history` holds the last this many `state` vectors (oldest first, the current
     one last): what a deployable student remembers."""

@@ -17,7 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from legged.envs.base import LeggedEnv
-from legged.envs.config import EnvConfig, PenaltyScales
+from legged.envs.config import GO1_RANDOMIZATION, EnvConfig, NoiseConfig, PenaltyScales, RandomizationConfig
 from legged.envs.curriculum import next_level, pick_tile
 from legged.envs.math import roll_pitch, yaw_rotate
 from legged.envs.paths import pad_paths, straight_path
@@ -99,6 +99,10 @@ class ConfinedConfig(EnvConfig):
     """Task reward weights."""
     penalties: PenaltyScales = PenaltyScales()
     """Penalty weights."""
+    randomization: RandomizationConfig = GO1_RANDOMIZATION
+    """Domain randomisation (on, with the model ranges that cover the reference robots: legged.envs.config.COVERING)."""
+    noise: NoiseConfig = NoiseConfig(enabled=True)
+    """Observation noise on `state` (on)."""
 
 
 class ConfinedEnv(LeggedEnv):

@@ -17,15 +17,24 @@ class MjxContactReader:
     """Normal contact force on each listed geom, from an MJX data (static efc layout, jittable)."""
 
     def __init__(self, mj_model: mujoco.MjModel, mjx_model, geom_ids: np.ndarray):
-        if mj_model.opt.cone != mujoco.mjtCone.mjCONE_PYRAMIDAL:
-            raise ValueError("contact read-out expects a pyramidal friction cone")
         # The contact layout (which geoms, which constraint rows) is static in MJX: one jitted collision
         # pass on the initial data reveals it (an eager mjx.forward took over a minute on a CPU).
-        contact = jax.jit(mjx.collision)(mjx_model, mjx.make_data(mjx_model))._impl.contact
+        # (compiled ahead and called: that runs now even when the reader is first needed inside a traced function)
+        with jax.ensure_compile_time_eval():
+            data = mjx.make_data(mjx_model)
+        contact = jax.jit(mjx.collision).lower(mjx_model, data).compile()(mjx_model, data)._impl.contact
         geoms = np.asarray(contact.geom)
         addr = np.asarray(contact.efc_address)
         dims = np.asarray(contact.dim)
-        self._rows = np.stack([addr + k for k in range(2 * (int(dims.max()) - 1))], -1) if len(addr) else None
+        # A pyramidal cone's normal force is the sum of its 2 (dim - 1) edge forces (one row for a frictionless
+        # contact); an elliptic cone's is its first row.
+        if mj_model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL:
+            rows = np.where(dims > 1, 2 * (dims - 1), 1)
+        else:
+            rows = np.ones_like(dims)
+        width = int(rows.max()) if len(rows) else 0
+        self._rows = np.stack([addr + k for k in range(width)], -1) if len(addr) else None
+        self._row_mask = (np.arange(width)[None] < rows[:, None]).astype(np.float32) if len(addr) else None
         self._valid = (addr >= 0).astype(np.float32)
         # match[c, g] = 1 when contact c touches the g-th geom of interest.
         self._match = ((geoms[:, :1] == geom_ids[None]) | (geoms[:, 1:] == geom_ids[None])).astype(np.float32)
@@ -34,8 +43,7 @@ class MjxContactReader:
     def __call__(self, data) -> jax.Array:
         if self._rows is None:
             return jnp.zeros(self._num_geoms)
-        # With a pyramidal cone the normal force is the sum of the pyramid edge forces.
-        normal = data._impl.efc_force[self._rows].sum(-1) * self._valid
+        normal = (data._impl.efc_force[self._rows] * self._row_mask).sum(-1) * self._valid
         return normal @ self._match
 
 

@@ -8,7 +8,7 @@ import jax
 import jax.numpy as jnp
 
 from legged.envs.base import LeggedEnv
-from legged.envs.config import EnvConfig, PenaltyScales
+from legged.envs.config import GO1_RANDOMIZATION, EnvConfig, NoiseConfig, PenaltyScales, RandomizationConfig
 from legged.envs.math import yaw_rotate
 from legged.envs.rewards import tracking
 from legged.robots import GO1
@@ -49,6 +49,10 @@ class FlatConfig(EnvConfig):
     """Penalty weights."""
     only_positive_rewards: bool = True
     """Clip each step's total reward at 0 (see EnvConfig)."""
+    randomization: RandomizationConfig = GO1_RANDOMIZATION
+    """Domain randomisation (on, with the model ranges that cover the reference robots: legged.envs.config.COVERING)."""
+    noise: NoiseConfig = NoiseConfig(enabled=True)
+    """Observation noise on `state` (on)."""
 
 
 class VelocityTrackingEnv(LeggedEnv):

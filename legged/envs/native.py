@@ -121,15 +121,24 @@ class NativePhysics:
         return view
 
     def step(self, ctrl: np.ndarray) -> tuple[dict, np.ndarray]:
-        """One control period of every simulation: (view, diverged). A diverged simulation (MuJoCo error or
-        instability, non-finite or too fast state) shows its last good state; its episode must restart."""
-        self._state["ctrl"][:] = ctrl
+        """One control period of every simulation: (view, diverged). `ctrl` is (num_envs, nu), or a schedule
+        (num_envs, n_substeps, nu) stepped in runs of physics steps over which no simulation's controls change. A
+        diverged simulation (MuJoCo error or instability, non-finite or too fast state) shows its last good state;
+        its episode must restart."""
+        if ctrl.ndim == 2:
+            runs = [(0, self.n_substeps, ctrl)]
+        else:
+            changes = np.flatnonzero(np.any(ctrl[:, 1:] != ctrl[:, :-1], axis=(0, 2))) + 1
+            edges = [0, *changes.tolist(), self.n_substeps]
+            runs = [(a, b, ctrl[:, a]) for a, b in zip(edges[:-1], edges[1:])]
         before = self._unstable_counts()
         failed = np.zeros(self.num_envs, bool)
-        try:
-            self.batch.step(nstep=self.n_substeps)
-        except SimulationError as exc:
-            failed[exc.ids] = True
+        for first, stop, controls in runs:
+            self._state["ctrl"][:] = controls
+            try:
+                self.batch.step(nstep=stop - first)
+            except SimulationError as exc:
+                failed[exc.ids] = True
         view = self._read()
         bad = failed | (self._unstable_counts() > before) | is_diverged(view["qpos"], view["qvel"], self.limit, np)
         if bad.any():
@@ -233,7 +242,8 @@ class NativeEnvs:
         return data
 
     def controls(self, state: State, action: jax.Array, *args) -> jax.Array:
-        """The actuator controls the task's `prepare` gives for batched actions."""
+        """The actuator controls the task's `prepare` gives for batched actions: (num_envs, nu), or with a schedule
+        (action latency) (num_envs, n_substeps, nu)."""
         return self._prepare(state, action, *args)[0]
 
     def step(self, state: State, action: jax.Array, *args) -> State:

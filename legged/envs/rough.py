@@ -15,7 +15,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from legged.envs.config import NoiseConfig, RandomizationConfig
+from legged.envs.config import GO1_RANDOMIZATION, NoiseConfig, RandomizationConfig
 from legged.envs.curriculum import next_level, pick_tile
 from legged.envs.flat import FlatConfig, VelocityTrackingEnv
 from legged.robots import GO1
@@ -40,8 +40,9 @@ class RoughConfig(FlatConfig):
     """Spacing of the 3 x 3 terrain heights around each foot in `privileged_state`, metres."""
     edge_margin: float = 1.0
     """An episode ends as a truncation when the body comes this close to the terrain's edge, metres."""
-    randomization: RandomizationConfig = RandomizationConfig(enabled=True)
-    """Domain randomisation (on: friction, masses, centre of mass, motor strength, PD gains, pushes)."""
+    randomization: RandomizationConfig = GO1_RANDOMIZATION
+    """Domain randomisation (on: friction, masses, centre of mass, motor strength, PD gains, pushes, and the model
+    ranges that cover the reference robots: COVERING)."""
     noise: NoiseConfig = NoiseConfig(enabled=True)
     """Observation noise on `state` (on)."""
     gyro_in_state: bool = True

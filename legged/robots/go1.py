@@ -26,4 +26,17 @@ GO1 = RobotSpec(
     # The paper's local planner picks body heights in 0.23-0.31 m; a little crouch below that is held
     # easily with Kp 20, a stretch above 0.32 m leaves the feet too little reach over bumps.
     body_height_range=(0.22, 0.32),
+    differences=(
+        ("joint_damping", "0.5 N m s/rad on every joint, MuJoCo Playground's MJX Go1 value, which the shipped policies "
+                          "trained with (Menagerie: 1 on abduction, 2 on hip and knee)"),
+        ("foot_contact", "condim 3 with MuJoCo's default solver parameters and no margin, the plain contact MJX is fast "
+                         "with (Menagerie: condim 6 with torsional and rolling friction, solimp 0.015-1 over 23 mm, "
+                         "1 mm margin)"),
+        ("body_contact", "no margin (Menagerie: 1 mm)"),
+        ("actuator_gains", "the policies' PD servo, Kp 20 and Kd 0.5 (Menagerie: a position actuator with Kp 100 and "
+                           "no D term)"),
+        ("solver", "pyramidal cone, 4 iterations, 8 line-search steps, Euler damping off: fast in MJX (Menagerie: "
+                   "elliptic cone with impratio 100, 100 and 50 iterations)"),
+        ("timestep", "5 ms, 4 steps per 50 Hz control step (Menagerie: MuJoCo's default 2 ms)"),
+    ),
 )

@@ -45,4 +45,16 @@ OP3 = RobotSpec(
     body_height_range=(0.20, 0.27),
     arm_geoms=("l_upper_arm", "l_forearm", "r_upper_arm", "r_forearm"),
     head_camera="head_cam",
+    differences=(
+        ("joint_damping", "none: Menagerie's 1.084 N m s/rad of joint damping is the D term of the servo here (Kd "
+                          "1.084), so the two agree until the torque saturates and Kd randomisation acts on all of it"),
+        ("foot_contact", "MuJoCo's default solref 0.02 s: Menagerie's stiffer 0.004 s (0.012 s mixed with a plain floor) "
+                         "needs its 2 ms step"),
+        ("body_contact", "MuJoCo's default solref 0.02 s, as the feet"),
+        ("actuator_gains", "Kd 1.084 in the servo (see joint_damping; Menagerie: Kp 21.1 alone)"),
+        ("force_limits", "4.1 N m, the Dynamixel XM430-W350's stall torque at 12 V from its datasheet (Menagerie: "
+                         "5 N m)"),
+        ("solver", "4 iterations, 8 line-search steps, Euler damping off: fast in MJX (Menagerie: 100 and 50)"),
+        ("timestep", "5 ms, 5 steps per 40 Hz control step (Menagerie: MuJoCo's default 2 ms)"),
+    ),
 )

@@ -50,11 +50,29 @@ class RobotSpec:
     """Arm collision geoms (humanoids; empty for quadrupeds)."""
     head_camera: str | None = None
     """MJCF camera on the head that sees what the robot's own camera sees (None: the robot has none)."""
+    differences: tuple[tuple[str, str], ...] = ()
+    """(quantity, reason) for each dynamics quantity in which `mjcf_path` differs from MuJoCo Menagerie's model of the
+    robot: joint_damping, joint_armature, joint_frictionloss, foot_contact, body_contact, actuator_gains,
+    force_limits, solver, timestep (the fidelity tests check that exactly these differ)."""
+    source: str = "project"
+    """Which model of the robot `mjcf_path` holds: project, a reference name or a user's file (legged.robots.models)."""
+    timestep: float | None = None
+    """Physics step the model needs, seconds (None: the task's `sim_dt`)."""
+    body_slots: tuple[int, ...] = ()
+    """For a model whose trunk has other collision geoms than the project's: the index into the project's
+    `body_geoms` each of `body_geoms` stands for (empty: one each), so body contact observations keep their size."""
+    body_slot_count: int = 0
+    """Number of those trunk contact slots (0: one per `body_geoms`)."""
 
     @property
     def num_joints(self) -> int:
         """Number of actuated joints (= action size)."""
         return len(self.joint_names)
+
+    @property
+    def num_body_slots(self) -> int:
+        """Trunk contact slots of the observations (the project model's trunk geoms)."""
+        return self.body_slot_count or len(self.body_geoms)
 
     @property
     def collision_geoms(self) -> tuple[str, ...]:

@@ -7,6 +7,7 @@ copies of the height maps, triangulated the way MuJoCo triangulates every height
 from __future__ import annotations
 
 import dataclasses
+import functools
 import xml.etree.ElementTree as ET
 
 import mujoco
@@ -69,6 +70,34 @@ CONTACT_SLOTS = 16
 forces is exact while a geom has at most this many (Go1 on the confined height fields: at most 7 seen)."""
 
 
+_FLOOR_PROBE = """<mujoco><worldbody><geom type="plane" size="0 0 1"/>
+<body pos="0 0 0.099"><freejoint/><geom type="sphere" size="0.1" {attrs}/></body></worldbody></mujoco>"""
+
+
+@functools.lru_cache(maxsize=256)
+def _mixed_with_floor(attrs: str) -> tuple:
+    """(condim, friction[5], solref[2], solimp[5]) of a contact between a geom with contact attributes `attrs`
+    and the scene's floor (MuJoCo's default contact parameters), as MuJoCo itself mixes them."""
+    model = mujoco.MjModel.from_xml_string(_FLOOR_PROBE.format(attrs=attrs))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    c = data.contact[0]
+    return int(c.dim), tuple(c.friction), tuple(c.solref), tuple(c.solimp)
+
+
+def pair_attributes(robot_model: mujoco.MjModel, geom: str | int, friction: float) -> dict:
+    """Attributes of the explicit contact pair of robot geom `geom` (name or id) with a floor or ceiling: the contact the robot
+    model's own geom makes with a plain floor (condim, solref, solimp, torsional and rolling friction, by MuJoCo's
+    mixing rules, its priority included; margin and gap the geom's), with the scene's sliding `friction`."""
+    g = robot_model.geom(geom)
+    fmt = lambda v: " ".join(f"{x:.9g}" for x in np.ravel(v))
+    attrs = (f'condim="{int(g.condim[0])}" friction="{fmt(g.friction)}" solref="{fmt(g.solref)}" '
+             f'solimp="{fmt(g.solimp)}" solmix="{fmt(g.solmix)}" priority="{int(g.priority[0])}"')
+    condim, mixed, solref, solimp = _mixed_with_floor(attrs)
+    return dict(condim=str(condim), friction=fmt((friction, friction) + mixed[2:]), solref=fmt(solref),
+                solimp=fmt(solimp), margin=fmt(g.margin), gap=fmt(g.gap))
+
+
 def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions(),
               contact_sensors: tuple[str, ...] = ()) -> str:
     """Standalone MJCF text: the robot file with the terrain and contact pairs added, and a contact sensor
@@ -110,9 +139,9 @@ def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneO
     if options.collide_legs:
         pairs += [(g, FLOOR_GEOM) for g in robot.thigh_geoms + robot.calf_geoms]
         pairs += [(g, s) for g in robot.thigh_geoms for s in surfaces[1:]]
-    friction = f"{options.friction} {options.friction} 0.005 0.0001 0.0001"
+    alone = mujoco.MjModel.from_xml_path(str(robot.mjcf_path))
     for geom, surface in pairs:
-        ET.SubElement(contact, "pair", geom1=geom, geom2=surface, condim="3", friction=friction)
+        ET.SubElement(contact, "pair", geom1=geom, geom2=surface, **pair_attributes(alone, geom, options.friction))
     if contact_sensors:
         sensor = root.find("sensor") if root.find("sensor") is not None else ET.SubElement(root, "sensor")
         for geom in contact_sensors:

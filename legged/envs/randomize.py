@@ -1,0 +1,97 @@
+"""Domain randomisation of the Go1 tasks as pure functions: `draw` samples an episode's parameters from a
+RandomizationConfig and a key, `randomized_fields` turns them into model fields, one function for both engines
+(jax.numpy for MJX models under vmap, numpy for the native engine's per-simulation fields).
+
+Parameters a config leaves unset (None, 0) are not drawn, so runs saved before they existed replay their episodes
+unchanged; their keys come from a separate stream (`fold_in(rng, 1)`) for the same reason.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from legged.envs.config import SOFT_SOLIMP, RandomizationConfig
+
+MUJOCO_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
+"""MuJoCo's default solimp: the hard end of RandomizationConfig.contact_softness."""
+MODEL_DR = ("damping", "armature", "frictionloss", "softness", "timeconst", "margin", "latency")
+"""Randomised model quantities a teacher's privileged observation holds after the older ones (where drawn)."""
+
+
+def draw(c: RandomizationConfig, rng: jax.Array, nbody: int, nu: int, sim_dt: float, n_substeps: int,
+         nominal_friction) -> dict:
+    """An episode's randomisation parameters (nominal values when `c` is disabled): per-body mass scales, payload,
+    centre of mass, per-motor strength, Kp and Kd scales, friction, and where set the joints' damping, armature and
+    friction loss, the feet's contact softness, time constant and margin, the action latency in whole physics steps
+    (of `sim_dt`, at most `n_substeps`), encoder offsets and IMU biases."""
+    if not c.enabled:
+        return dict(friction=jnp.float32(nominal_friction), mass_scale=jnp.ones(nbody), base_mass=jnp.float32(0.0),
+                    com=jnp.zeros(3), strength=jnp.ones(nu), kp=jnp.float32(1.0), kd=jnp.float32(1.0))
+    k = jax.random.split(rng, 7)
+    u = lambda key, r, shape=(): jax.random.uniform(key, shape, minval=r[0], maxval=r[1])
+    dr = dict(friction=u(k[0], c.friction), mass_scale=u(k[1], c.link_mass_scale, (nbody,)),
+              base_mass=u(k[2], c.base_mass_offset), com=u(k[3], (-c.com_offset, c.com_offset), (3,)),
+              strength=u(k[4], c.motor_strength, (nu,)), kp=u(k[5], c.kp_scale), kd=u(k[6], c.kd_scale))
+    more = jax.random.split(jax.random.fold_in(rng, 1), 9)
+    ranges = (("damping", c.joint_damping, (nu,)), ("armature", c.joint_armature, (nu,)),
+              ("frictionloss", c.joint_frictionloss, (nu,)), ("softness", c.contact_softness, ()),
+              ("timeconst", c.contact_timeconst, ()), ("margin", c.contact_margin, ()))
+    for i, (key, r, shape) in enumerate(ranges):
+        if r is not None:
+            dr[key] = u(more[i], r, shape)
+    if c.latency_s is not None:
+        low, high = (int(round(t / sim_dt)) for t in c.latency_s)
+        dr["latency"] = jax.random.randint(more[6], (), low, min(high, n_substeps) + 1)
+    if c.encoder_offset:
+        dr["encoder_offset"] = u(more[7], (-c.encoder_offset, c.encoder_offset), (nu,))
+    if any(c.imu_bias):
+        bias = jax.random.uniform(more[8], (6,), minval=-1.0, maxval=1.0)
+        dr["gravity_bias"], dr["gyro_bias"] = bias[:3] * c.imu_bias[0], bias[3:] * c.imu_bias[1]
+    return dr
+
+
+def randomized_fields(base: dict, dr: dict, trunk: int, xp=jnp) -> dict:
+    """Model fields after applying randomisation parameters `dr` to the nominal fields `base`.
+
+    One function for both engines: jax.numpy for MJX models (per environment, under vmap) and numpy for
+    native ones, where `dr` may carry a leading batch axis (one row per simulation).
+    """
+    scale = dr["mass_scale"]                                       # [..., nbody]
+    is_trunk = xp.arange(scale.shape[-1]) == trunk
+    mass = base["body_mass"] * scale
+    mass_trunk = mass[..., trunk] + dr["base_mass"]
+    ratio = xp.where(is_trunk, (mass_trunk / mass[..., trunk])[..., None], 1.0)
+    inertia = base["body_inertia"] * (scale * ratio)[..., None]
+    mass = xp.where(is_trunk, mass_trunk[..., None], mass)
+    ipos = base["body_ipos"] + is_trunk[:, None] * xp.asarray(dr["com"])[..., None, :]
+    pairs = base["pair_friction"]
+    friction = xp.concatenate([xp.broadcast_to(xp.asarray(dr["friction"])[..., None, None], mass.shape[:-1] + (len(pairs), 2)),
+                               xp.broadcast_to(pairs[:, 2:], mass.shape[:-1] + pairs[:, 2:].shape)], axis=-1)
+    gain0, bias0 = base["actuator_gainprm"], base["actuator_biasprm"]
+    strength = dr["strength"]                                      # [..., nu]
+    kp = gain0[:, 0] * xp.asarray(dr["kp"])[..., None] * strength
+    kd = -bias0[:, 2] * xp.asarray(dr["kd"])[..., None] * strength
+    lead = strength.shape[:-1]
+    gain = xp.concatenate([kp[..., None], xp.broadcast_to(gain0[:, 1:], lead + gain0[:, 1:].shape)], axis=-1)
+    bias = xp.concatenate([xp.broadcast_to(bias0[:, :1], lead + (len(bias0), 1)), -kp[..., None], -kd[..., None],
+                           xp.broadcast_to(bias0[:, 3:], lead + bias0[:, 3:].shape)], axis=-1)
+    out = dict(body_mass=mass, body_inertia=inertia, body_ipos=ipos, pair_friction=friction,
+               actuator_gainprm=gain, actuator_biasprm=bias)
+    dofs = base["joint_dofs"]                                      # [nu, nv] one-hot: policy joint -> dof
+    for key, field in (("damping", "dof_damping"), ("armature", "dof_armature"), ("frictionloss", "dof_frictionloss")):
+        if key in dr:
+            out[field] = xp.where(dofs.sum(0) > 0, xp.asarray(dr[key]) @ dofs, base[field])
+    feet = base["foot_pairs"][:, None] > 0                         # [npair, 1]
+    if "softness" in dr:
+        soft = xp.asarray(dr["softness"])[..., None, None]
+        default, target = xp.asarray(MUJOCO_SOLIMP), xp.asarray(SOFT_SOLIMP)
+        out["pair_solimp"] = xp.where(feet, (1 - soft) * default + soft * target, base["pair_solimp"])
+    if "timeconst" in dr:
+        solref = base["pair_solref"]
+        timeconst = xp.broadcast_to(xp.asarray(dr["timeconst"])[..., None, None], lead + solref[:, :1].shape)
+        rest = xp.broadcast_to(solref[:, 1:], lead + solref[:, 1:].shape)
+        out["pair_solref"] = xp.where(feet, xp.concatenate([timeconst, rest], -1), solref)
+    if "margin" in dr:
+        out["pair_margin"] = xp.where(feet[:, 0], xp.asarray(dr["margin"])[..., None], base["pair_margin"])
+    return out

