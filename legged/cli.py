@@ -75,6 +75,8 @@ def cmd_eval(args) -> int:
         raise ValueError(f"{args.run_dir} trained on the {config.drill} drill, where nobody else plays: its eval "
                          f"plays the drill, without --opponent or --teammate (or use `legged drill {config.drill} "
                          f"--player {args.run_dir}`)")
+    if args.compare_robots and (args.robot != "project" or len(set(args.compare_robots)) < len(args.compare_robots)):
+        raise ValueError("--compare-robots names each model once, and replaces --robot")
     robots = args.compare_robots or [args.robot]
     for robot in robots:  # a model that cannot be used fails here, before a policy is loaded or a scene compiled
         on_robot(config, robot, args.physics)

@@ -63,6 +63,8 @@ class TaskEntry:
     """Trainers it supports."""
     vision: bool = False
     """Its actor reads camera images (a CNN; the rsl backend only)."""
+    robot_models: bool = False
+    """It runs other models of its robot than the project's (`env.robot_model`, `--robot`; legged.robots.models)."""
     bounded_actions: bool = False
     """Its actions are joint targets the environment clips to +-`env.action_clip` (and feeds back clipped): the
     deployed actor clips its output there too, in the framework and in its ONNX."""
@@ -77,15 +79,16 @@ class TaskEntry:
 
 
 TASKS: dict[str, TaskEntry] = {e.name: e for e in (
-    TaskEntry("go1-flat", FlatEnv, FlatConfig(), GO1, "locomotion", bounded_actions=True),
-    TaskEntry("go1-rough", RoughEnv, RoughConfig(), GO1, "locomotion", bounded_actions=True),
+    TaskEntry("go1-flat", FlatEnv, FlatConfig(), GO1, "locomotion", robot_models=True, bounded_actions=True),
+    TaskEntry("go1-rough", RoughEnv, RoughConfig(), GO1, "locomotion", robot_models=True, bounded_actions=True),
     TaskEntry("confined-waypoints", ConfinedEnv, ConfinedConfig(mode="waypoints", six_dof_command=True), GO1,
-              "confined", bounded_actions=True),
-    TaskEntry("confined-goal", ConfinedEnv, ConfinedConfig(mode="goal"), GO1, "confined", bounded_actions=True),
+              "confined", robot_models=True, bounded_actions=True),
+    TaskEntry("confined-goal", ConfinedEnv, ConfinedConfig(mode="goal"), GO1, "confined", robot_models=True,
+              bounded_actions=True),
     TaskEntry("confined-velocity", ConfinedEnv, ConfinedConfig(mode="velocity", success_bootstraps=True), GO1,
-              "confined", bounded_actions=True),
+              "confined", robot_models=True, bounded_actions=True),
     TaskEntry("confined-skills", ConfinedEnv, ConfinedConfig(mode="skills", success_bootstraps=True), GO1,
-              "confined", bounded_actions=True),
+              "confined", robot_models=True, bounded_actions=True),
     TaskEntry("op3-walk", _walk_skill, WalkSkillConfig(), OP3, "locomotion"),
     TaskEntry("op3-getup", _getup_skill, GetUpConfig(), OP3, "locomotion"),
     TaskEntry("soccer-1v1", _soccer, SoccerConfig(), OP3, "soccer"),

@@ -39,21 +39,29 @@ def ood_config(env_config):
         push_velocity=1.5 * r.push_velocity))
 
 
+MODEL_RANGES = ("joint_damping", "joint_armature", "joint_frictionloss", "contact_softness", "contact_timeconst",
+                "contact_margin")
+"""Randomisation ranges that replace a model's own values: off when a policy runs on another model (`on_robot`)."""
+
+
 def on_robot(config, robot: str, physics: str | None = None):
     """The run config `config` with its task's robot model chosen (`--robot`: project, a reference name or an
     MJCF path; legged.robots.models), the model checked now (and that MJX runs it, for `physics` mjx); ValueError
-    naming the cause."""
+    naming the cause. On a model other than the project's, the randomisation keeps that model's own joint and foot
+    parameters (MODEL_RANGES off); the rest of it (masses, gains, latency, pushes, ...) stays as the run has it."""
     from legged.robots.models import mjx_check, robot_model
 
     if robot in ("", "project"):
         return config
-    if not hasattr(config.env, "robot_model"):
+    if not task_entry(config.task).robot_models:
         raise ValueError(f"--robot {robot}: {config.task} runs on the project's {task_entry(config.task).robot.name} "
                          f"model only")
     spec = robot_model(task_entry(config.task).robot, robot, config.env.ctrl_dt)
     if physics == "mjx":
         mjx_check(spec)
-    return dataclasses.replace(config, env=dataclasses.replace(config.env, robot_model=robot))
+    # the model's own joints and feet, not draws that would replace them (a run trained with those ranges)
+    own = dataclasses.replace(config.env.randomization, **{k: None for k in MODEL_RANGES})
+    return dataclasses.replace(config, env=dataclasses.replace(config.env, robot_model=robot, randomization=own))
 
 
 RATIO_FIGURES = ("tracking_error_mps", "fall_rate", "episode_return", "goals_for_per_episode",

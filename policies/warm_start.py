@@ -102,9 +102,12 @@ def same_task_start(alg, run_path: Path, task: str) -> str | None:
         return None
     path = run.latest_checkpoint()
     saved = load_checkpoint(path)["alg"]
-    for net, key in ((alg.actor, "actor_state_dict"), (alg.critic, "critic_state_dict")):
-        if saved[key]["mlp.0.weight"].shape[1] != net.state_dict()["mlp.0.weight"].shape[1]:
-            return None  # its observations changed (e.g. the randomisation grew the privileged state): by layout
+    nets = ((alg.actor, "actor_state_dict"), (alg.critic, "critic_state_dict"))
+    differ = {name for net, key in nets for name, value in net.state_dict().items()
+              if name in saved[key] and saved[key][name].shape != value.shape}
+    if differ and differ <= {"mlp.0.weight"} | {n for n in differ if n.startswith("obs_normalizer.")}:
+        return None  # only its observations changed (e.g. the randomisation grew the privileged state): by layout
+    for net, key in nets:
         try:
             net.load_state_dict(saved[key])
         except RuntimeError as e:

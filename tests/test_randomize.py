@@ -73,3 +73,38 @@ def test_a_run_saved_before_the_model_ranges_draws_what_it_drew():
         np.testing.assert_array_equal(before[k], after[k])
     off = draw(RandomizationConfig(), key, 14, 12, 0.005, 4, 0.8)
     assert set(off) == OLD_KEYS and float(off["kp"]) == 1.0
+
+
+def test_sensor_biases_reach_the_noisy_state():
+    """Encoder offsets and IMU biases stay in the deployable state with observation noise on (noise of zero size
+    here, so that what remains is the bias); the privileged copy of the state stays clean."""
+    from legged.envs.config import NoiseConfig
+    from legged.tasks import make
+
+    env = make("go1-flat", noise=NoiseConfig(enabled=True, gravity=0.0, joint_pos=0.0, joint_vel=0.0, gyro=0.0))
+    view, info = env._spawned_view(jax.random.PRNGKey(5))
+    obs, _ = env._observe(view, info, jax.random.PRNGKey(6))
+    layout = dict((n, k) for n, k in env.observation_layout()["state"])
+    start = {}
+    at = 0
+    for n, k in env.observation_layout()["state"]:
+        start[n], at = at, at + k
+    gap = np.asarray(obs["state"] - obs["privileged_state"][:at])
+    np.testing.assert_allclose(gap[start["joint_pos"]:start["joint_pos"] + layout["joint_pos"]],
+                               info["dr"]["encoder_offset"], atol=1e-6)
+    np.testing.assert_allclose(gap[start["gravity"]:start["gravity"] + 3], info["dr"]["gravity_bias"], atol=1e-6)
+    assert np.abs(info["dr"]["encoder_offset"]).max() > 0
+
+
+def test_another_robot_model_keeps_its_own_joints_and_feet():
+    """On a reference model a run's randomisation no longer replaces the model's joint and foot parameters; a soccer
+    run refuses --robot (its scene has the project's OP3 only)."""
+    from policies.config import TrainConfig
+    from policies.evaluate import MODEL_RANGES, on_robot
+
+    config = on_robot(TrainConfig(task="go1-flat").resolved(), "menagerie")
+    assert config.env.robot_model == "menagerie"
+    assert all(getattr(config.env.randomization, k) is None for k in MODEL_RANGES)
+    assert config.env.randomization.latency_s == COVERING["latency_s"]  # the rest as the run has it
+    with pytest.raises(ValueError, match="project's op3 model only"):
+        on_robot(TrainConfig(task="soccer-1v1").resolved(), "menagerie")

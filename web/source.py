@@ -161,6 +161,9 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
         check_port(request.host, request.port)
     if request.opponent is not None and request.trajectory is not None:
         raise ValueError("--opponent plays a new rollout; it cannot be combined with --trajectory")
+    if request.robot not in ("", "project") and (request.drill is not None or request.trajectory is not None):
+        raise ValueError("--robot chooses the robot model of a Go1 rollout; it cannot be combined with --drill or "
+                         "--trajectory")
     if request.drill is not None:
         return _resolve_drill(request, log)
     run_dir = _run_dir_of(request)

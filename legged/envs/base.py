@@ -60,7 +60,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
         # A model whose trunk has other collision geoms than the project's pools their forces into the project's
         # trunk slots, so that observations keep their size on every model (RobotSpec.body_slots).
         self._body_pool = None
-        if robot.body_slots:
+        if robot.body_slot_count:
             self._body_pool = jnp.asarray(np.eye(robot.num_body_slots, dtype=np.float32)[list(robot.body_slots)])
         self._floor = jnp.asarray(terrain.floor)
         self._ceiling = jnp.asarray(terrain.ceiling)
@@ -340,7 +340,8 @@ class LeggedEnv(MjxEnv, abc.ABC):
                       ("dynamics", jnp.stack([dr["friction"], dr["base_mass"], dr["kp"], dr["kd"]])),
                       ("com", dr["com"]), ("motor_strength", dr["strength"]),
                       ("task", self._task_privileged(data, info))]
-        drawn = [jnp.atleast_1d(dr[k]).astype(jnp.float32) for k in MODEL_DR if k in dr]
+        drawn = [jnp.atleast_1d(dr[k] * (self.config.sim_dt if k == "latency" else 1)).astype(jnp.float32)
+                 for k in MODEL_DR if k in dr]  # the latency in seconds: a physics step's length varies by model
         if drawn:  # the model randomisation, where a run draws it (after the older entries, which keep their place)
             privileged.append(("model_dynamics", jnp.concatenate(drawn)))
         return state, privileged
@@ -353,7 +354,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
         state = clean + self._sensor_bias(state_parts, info["dr"])
         if self.config.noise.enabled:
             scales = jnp.concatenate([n for _, _, n in state_parts])
-            state = clean + scales * jax.random.uniform(rng, clean.shape, minval=-1, maxval=1)
+            state = state + scales * jax.random.uniform(rng, clean.shape, minval=-1, maxval=1)
         privileged = jnp.concatenate([clean] + [v for _, v in privileged_parts])
         obs = {"state": state, "privileged_state": privileged}
         if self.config.history_steps:

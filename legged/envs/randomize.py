@@ -41,8 +41,8 @@ def draw(c: RandomizationConfig, rng: jax.Array, nbody: int, nu: int, sim_dt: fl
         if r is not None:
             dr[key] = u(more[i], r, shape)
     if c.latency_s is not None:
-        low, high = (int(round(t / sim_dt)) for t in c.latency_s)
-        dr["latency"] = jax.random.randint(more[6], (), low, min(high, n_substeps) + 1)
+        low, high = (min(int(round(t / sim_dt)), n_substeps) for t in c.latency_s)
+        dr["latency"] = jax.random.randint(more[6], (), low, high + 1)
     if c.encoder_offset:
         dr["encoder_offset"] = u(more[7], (-c.encoder_offset, c.encoder_offset), (nu,))
     if any(c.imu_bias):

@@ -26,6 +26,7 @@ import dataclasses
 import hashlib
 import importlib.util
 import os
+import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -199,6 +200,8 @@ def _assign_parts(spec: mujoco.MjSpec, project: mujoco.MjModel, robot: RobotSpec
     """(RobotSpec fields, new names): the file's geom names for each part list of the RobotSpec (feet, body, thigh,
     calf, arm geoms) with `body_slots` (the project body geom each of the file's body geoms stands for), and the
     names to give its unnamed ones, by (body name, index among that body's geoms)."""
+    # every geom the XML holds, where the XML holds it, so that a geom's index within its body is its XML element's
+    spec.compiler.discardvisual, spec.compiler.fusestatic = False, False
     model = spec.compile()
     roles = ("feet_geoms", "body_geoms", "thigh_geoms", "calf_geoms", "arm_geoms")
     parts = [(role, name) for role in roles for name in getattr(robot, role)]
@@ -338,7 +341,7 @@ def _cache_file(name: str, xml: str) -> Path:
     root.mkdir(parents=True, exist_ok=True)
     out = root / f"{name}-{hashlib.sha256(xml.encode()).hexdigest()[:16]}.xml"
     if not out.is_file():
-        tmp = out.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(xml)
-        os.replace(tmp, out)
+        with tempfile.NamedTemporaryFile("w", dir=root, suffix=".tmp", delete=False) as tmp:
+            tmp.write(xml)
+        os.replace(tmp.name, out)
     return out
