@@ -176,9 +176,8 @@ def soak(task: str, steps: int, batch: int = 256, seed: int = 0, physics: str = 
     (observations and rewards after auto-reset), the episodes ended by divergence, and all episodes."""
     entry = task_entry(task)
     entry.check(physics=physics)
-    config = entry.config
-    if entry.kind != "soccer":  # soccer has no dynamics randomisation yet
-        config = dataclasses.replace(config, randomization=dataclasses.replace(config.randomization, enabled=True))
+    config = dataclasses.replace(entry.config, randomization=dataclasses.replace(entry.config.randomization,
+                                                                                  enabled=True))
     env = learner_env(entry, make(task, config))
     vector = VectorEnv(env, batch, physics, threads)
     rng = np.random.default_rng(seed)
@@ -204,6 +203,6 @@ def soak(task: str, steps: int, batch: int = 256, seed: int = 0, physics: str = 
             progress(f"{task}: {done_steps:,} / {steps:,} steps, {episodes} episodes, {diverged} diverged")
     elapsed = time.perf_counter() - t0
     return {"task": task, "physics": physics, "batch": batch, "env_steps": done_steps,
-            "randomization": entry.kind != "soccer",
+            "randomization": True,
             "non_finite_values": non_finite, "episodes": episodes, "diverged_episodes": diverged,
             "env_steps_per_s": round(done_steps / elapsed, 1), "seed": seed}

@@ -17,10 +17,12 @@ def cmd_bench(args) -> int:
     from legged.bench import attach_peer, bench_env, bench_peer, print_table
     from legged.tasks import default_config
 
-    default_config(args.task)  # unknown task -> clear error before any compilation
+    for task in args.task:
+        default_config(task)  # unknown task -> clear error before any compilation
     progress = None if args.quiet else (lambda msg: print(f"[bench] {msg}", file=sys.stderr, flush=True))
-    records = bench_env(args.task, args.batch, args.seconds, physics=args.physics, threads=args.threads or None,
-                        progress=progress, randomize=tuple(args.randomize))
+    records = [r for task in args.task for r in bench_env(task, args.batch, args.seconds, physics=args.physics,
+                                                            threads=args.threads or None, progress=progress,
+                                                            randomize=tuple(args.randomize))]
     if args.peer_python:
         if progress:
             progress("running the Playground peer in the same run")
@@ -71,7 +73,8 @@ def add_bench_commands(sub) -> None:
     bsub = b.add_subparsers(dest="what", required=True)
     add_bench_plan(bsub)
     be = bsub.add_parser("env", help="environment steps per second on MJX and native MuJoCo, beside bare physics")
-    be.add_argument("--task", default="confined-waypoints")
+    be.add_argument("--task", type=task_names, default=["confined-waypoints"],
+                    help="comma-separated tasks, measured one after the other in this run")
     be.add_argument("--batch", type=ints(1, 65536), default=[1, 64, 256], help="comma-separated batch sizes")
     be.add_argument("--physics", type=choices("mjx", "native", "rollout"), default=["mjx", "native", "rollout"],
                     help="comma-separated: mjx, native (the task on each engine), rollout (bare native physics)")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from legged.cli_args import SEED, add_physics_options, bounded
+from legged.cli_args import SEED, add_physics_options, add_robot_option, bounded
 
 
 def cmd_drill(args) -> int:
@@ -17,7 +17,7 @@ def cmd_drill(args) -> int:
         raise ValueError(f"--checkpoint picks a checkpoint of a run; --player {args.player} has none")
     report = run_drill(args.drill, args.player, args.episodes, args.seed, args.physics, args.threads or None,
                        randomize=args.randomize, progress=not args.quiet, num_envs=min(args.episodes, args.num_envs),
-                       checkpoint=args.checkpoint, seconds=args.seconds)
+                       checkpoint=args.checkpoint, seconds=args.seconds, robot=args.robot)
     print(json.dumps(report) if args.json else json.dumps(report, indent=2))
     return 0
 
@@ -39,6 +39,7 @@ def add_soccer_commands(sub) -> None:
     dr.add_argument("--randomize", action="store_true",
                     help="the game's domain randomisation (friction, ball, masses, motor strength)")
     add_physics_options(dr, default="native")
+    add_robot_option(dr)
     dr.add_argument("--json", action="store_true", help="one-line JSON")
     dr.add_argument("--quiet", action="store_true", help="no progress bar")
     dr.set_defaults(fn=cmd_drill)

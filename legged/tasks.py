@@ -17,6 +17,7 @@ from legged.envs.rough import RoughConfig, RoughEnv
 from legged.robots import GO1, OP3
 from legged.robots.spec import RobotSpec
 from legged.soccer.config import SoccerSceneConfig
+from legged.soccer.randomize import OP3_RANDOMIZATION
 from legged.soccer.skill_config import GetUpConfig, WalkSkillConfig
 from legged.soccer.task_config import SoccerConfig
 
@@ -66,8 +67,9 @@ class TaskEntry:
     robot_models: bool = False
     """It runs other models of its robot than the project's (`env.robot_model`, `--robot`; legged.robots.models)."""
     bounded_actions: bool = False
-    """Its actions are joint targets the environment clips to +-`env.action_clip` (and feeds back clipped): the
-    deployed actor clips its output there too, in the framework and in its ONNX."""
+    """Its actions are bounded: joint targets the environment clips to +-`env.action_clip` (and feeds back clipped),
+    or a soccer player's walker commands (policies.policy_io.action_bound); the deployed actor clips its output there
+    too, in the framework and in its ONNX."""
 
     def check(self, physics: str | None = None, backend: str | None = None) -> None:
         """ValueError naming what to use instead when this task does not support `physics` or `backend`."""
@@ -78,22 +80,31 @@ class TaskEntry:
             raise ValueError(f"{self.name} trains with --backend {' or '.join(self.backends)}, not {backend!r}{why}")
 
 
+_GO1 = dict(motor_curve=True)
+"""What the Go1 tasks' configs set beyond their classes' defaults (runs saved before it existed load without)."""
+_OP3 = dict(randomization=OP3_RANDOMIZATION)
+"""What the soccer tasks' configs set beyond SoccerConfig's defaults (the skills' configs hold it already)."""
+_DEPLOYED = dict(robot_models=True, bounded_actions=True)
+"""Tasks whose policies deploy: they run on other models of their robot, their actors' actions are bounded."""
+
+
 TASKS: dict[str, TaskEntry] = {e.name: e for e in (
-    TaskEntry("go1-flat", FlatEnv, FlatConfig(), GO1, "locomotion", robot_models=True, bounded_actions=True),
-    TaskEntry("go1-rough", RoughEnv, RoughConfig(), GO1, "locomotion", robot_models=True, bounded_actions=True),
-    TaskEntry("confined-waypoints", ConfinedEnv, ConfinedConfig(mode="waypoints", six_dof_command=True), GO1,
-              "confined", robot_models=True, bounded_actions=True),
-    TaskEntry("confined-goal", ConfinedEnv, ConfinedConfig(mode="goal"), GO1, "confined", robot_models=True,
-              bounded_actions=True),
-    TaskEntry("confined-velocity", ConfinedEnv, ConfinedConfig(mode="velocity", success_bootstraps=True), GO1,
-              "confined", robot_models=True, bounded_actions=True),
-    TaskEntry("confined-skills", ConfinedEnv, ConfinedConfig(mode="skills", success_bootstraps=True), GO1,
-              "confined", robot_models=True, bounded_actions=True),
-    TaskEntry("op3-walk", _walk_skill, WalkSkillConfig(), OP3, "locomotion"),
-    TaskEntry("op3-getup", _getup_skill, GetUpConfig(), OP3, "locomotion"),
-    TaskEntry("soccer-1v1", _soccer, SoccerConfig(), OP3, "soccer"),
-    TaskEntry("soccer-2v2", _soccer, SoccerConfig(scene=SoccerSceneConfig(players_per_team=2)), OP3, "soccer"),
-    TaskEntry("soccer-1v1-vision", _soccer, SoccerConfig(vision=True), OP3, "soccer", backends=("rsl",), vision=True),
+    TaskEntry("go1-flat", FlatEnv, FlatConfig(**_GO1), GO1, "locomotion", **_DEPLOYED),
+    TaskEntry("go1-rough", RoughEnv, RoughConfig(**_GO1), GO1, "locomotion", **_DEPLOYED),
+    TaskEntry("confined-waypoints", ConfinedEnv, ConfinedConfig(mode="waypoints", six_dof_command=True, **_GO1), GO1,
+              "confined", **_DEPLOYED),
+    TaskEntry("confined-goal", ConfinedEnv, ConfinedConfig(mode="goal", **_GO1), GO1, "confined", **_DEPLOYED),
+    TaskEntry("confined-velocity", ConfinedEnv, ConfinedConfig(mode="velocity", success_bootstraps=True, **_GO1), GO1,
+              "confined", **_DEPLOYED),
+    TaskEntry("confined-skills", ConfinedEnv, ConfinedConfig(mode="skills", success_bootstraps=True, **_GO1), GO1,
+              "confined", **_DEPLOYED),
+    TaskEntry("op3-walk", _walk_skill, WalkSkillConfig(), OP3, "locomotion", **_DEPLOYED),
+    TaskEntry("op3-getup", _getup_skill, GetUpConfig(), OP3, "locomotion", **_DEPLOYED),
+    TaskEntry("soccer-1v1", _soccer, SoccerConfig(**_OP3), OP3, "soccer", **_DEPLOYED),
+    TaskEntry("soccer-2v2", _soccer, SoccerConfig(scene=SoccerSceneConfig(players_per_team=2), **_OP3), OP3, "soccer",
+              **_DEPLOYED),
+    TaskEntry("soccer-1v1-vision", _soccer, SoccerConfig(vision=True, **_OP3), OP3, "soccer", backends=("rsl",),
+              vision=True, bounded_actions=True),
 )}
 """Every task, by name."""
 

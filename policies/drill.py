@@ -64,6 +64,18 @@ def check_player(spec: str, drill: DrillConfig) -> None:
                          f"policies are not trained for it")
 
 
+def check_robot(robot: str, physics: str) -> None:
+    """RobotModelError naming the cause when the drills cannot run on OP3 model `robot` with `physics` (checked
+    before any policy loads or scene compiles)."""
+    from legged.robots import OP3
+    from legged.robots.models import mjx_check, robot_model
+    from legged.robots.op3 import OP3_CTRL_DT
+
+    model = robot_model(OP3, robot, OP3_CTRL_DT)
+    if physics == "mjx":
+        mjx_check(model)
+
+
 def drill_player(spec: str, env: DrillEnv, checkpoint: str | None = None):
     """The player `--player` names (checked by `check_player`): `placo`, or a run whose policy (its newest
     checkpoint, or `checkpoint`) plays agent 0."""
@@ -88,15 +100,16 @@ def players_view(trained: SoccerConfig) -> SoccerConfig:
                                vision_sighted_ball=trained.vision_sighted_ball, vision_gaze=trained.vision_gaze)
 
 
-def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
+def drill_env(player: str, drill: DrillConfig, randomize: bool, robot: str = "project") -> DrillEnv:
     """The drill's environment for `player`: the drill itself (commanding the run's walker if it has one), or
-    for a skill run (legged.soccer.skills) its task set up as the drill; the game's randomisation on or off."""
+    for a skill run (legged.soccer.skills) its task set up as the drill; the game's randomisation on or off; every
+    robot on the OP3 model `robot` (project, menagerie or an MJCF path: legged.robots.models)."""
     from legged.soccer import skills
     from policies.run_dir import RunDir
 
     run = None if player in ("placo", SCRIPT) else RunDir(player).load_config()
     with_randomization = lambda config: dataclasses.replace(
-        config, randomization=dataclasses.replace(config.randomization, enabled=randomize))
+        config, robot_model=robot, randomization=dataclasses.replace(config.randomization, enabled=randomize))
     if run is not None and run.task == "op3-walk":  # the run's own config (what it trained on), drill commands
         return skills.WalkSkillEnv(with_randomization(dataclasses.replace(
             run.env, command_seconds=drill.command_seconds, command_low=drill.command_low,
@@ -119,20 +132,22 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool) -> DrillEnv:
 
 def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "native", threads: int | None = None,
               randomize: bool = False, progress: bool = True, num_envs: int = 16,
-              checkpoint: str | None = None, seconds: float | None = None) -> dict:
+              checkpoint: str | None = None, seconds: float | None = None, robot: str = "project") -> dict:
     """Run `episodes` episodes of drill `name` with `player` (a run: its newest checkpoint, or `checkpoint`),
-    each `seconds` long (default: DrillConfig's); returns its figures (see legged.soccer.drills)."""
+    each `seconds` long (default: DrillConfig's), on the OP3 model `robot`; returns its figures (see
+    legged.soccer.drills)."""
     lengths = {} if seconds is None else {"getup_seconds" if name == "getup" else "episode_seconds": seconds}
     drill = DrillConfig(name=name, **lengths)
     check_player(player, drill)
-    env = drill_env(player, drill, randomize)
+    check_robot(robot, physics)
+    env = drill_env(player, drill, randomize, robot)
     policy = drill_player(player, env, checkpoint)
     finals = evaluate(env, policy, episodes, seed, physics, num_envs, threads, progress=progress)
     errors = estimate_errors(finals)  # a vision player that estimates the game
     fell = np.array([f["fell"] > 0 for f in finals])
     played = str(policy.checkpoint) if hasattr(policy, "checkpoint") else None  # a run's checkpoint
     report = {"drill": name, "player": player, "checkpoint": played, "episodes": len(finals), "physics": physics,
-              "seed": seed, "randomized": randomize, "fall_rate": float(fell.mean()),
+              "seed": seed, "randomized": randomize, "robot": robot, "fall_rate": float(fell.mean()),
               "episode_seconds": float(np.mean([f["time_s"] for f in finals]))}
     if errors:
         report["estimate_rms_m"] = errors

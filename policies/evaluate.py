@@ -60,7 +60,8 @@ def on_robot(config, robot: str, physics: str | None = None):
     if physics == "mjx":
         mjx_check(spec)
     # the model's own joints and feet, not draws that would replace them (a run trained with those ranges)
-    own = dataclasses.replace(config.env.randomization, **{k: None for k in MODEL_RANGES})
+    drawn = {f.name for f in dataclasses.fields(config.env.randomization)}
+    own = dataclasses.replace(config.env.randomization, **{k: None for k in MODEL_RANGES if k in drawn})
     return dataclasses.replace(config, env=dataclasses.replace(config.env, robot_model=robot, randomization=own))
 
 

@@ -82,15 +82,45 @@ class BoundedActions(torch.nn.Module):
         super().__init__()
         self.module, self.bound = module, float(bound)
 
+    @property
+    def bounded(self) -> torch.nn.Module:
+        """The actor whose output is clipped."""
+        return self.module
+
     def forward(self, *inputs: torch.Tensor) -> torch.Tensor:
         return torch.clamp(self.module(*inputs), -self.bound, self.bound)
 
 
+COMMAND_BOUND = 1.0
+"""A commanding soccer player's actions are the walker's command in [-1, 1] (legged.soccer.walker clips it)."""
+
+
 def action_bound(config: TrainConfig) -> float | None:
-    """The range of a run's actions (its environment's clip), or None where actions are not joint targets."""
+    """The range of a run's actions, or None where they are unbounded: joint actions, the environment's clip; a
+    soccer player commanding a walker, the command's [-1, 1], or for corrections added to the placo player's command
+    1 + the largest the placo command can be (the walker clips the sum to [-1, 1], so a larger correction changes
+    nothing: `prior_reach`); None for a vision student whose actions also hold its estimate of the game (positions)."""
     from legged.tasks import task_entry
 
-    return float(config.env.action_clip) if task_entry(config.task).bounded_actions else None
+    entry = task_entry(config.task)
+    if not entry.bounded_actions:
+        return None
+    if entry.kind == "soccer" and config.walker:
+        if config.command_prior and config.env.vision:
+            return None
+        return COMMAND_BOUND + (prior_reach(config.walker) if config.command_prior else 0.0)
+    return float(config.env.action_clip)
+
+
+def prior_reach(walker: str) -> float:
+    """The largest |commanding action| of the placo player's command for the walker of run `walker`: placo's request
+    lies in its gait table's command grid, mapped onto the walker's command range."""
+    from legged.soccer.gait_table import load_gait_table
+
+    table, env = load_gait_table(xp=np), RunDir(walker).load_config().env
+    low, high = np.asarray(env.command_low, float), np.asarray(env.command_high, float)
+    ends = [2.0 * (np.asarray(v, float) - low) / (high - low) - 1.0 for v in (table.command_low, table.command_high)]
+    return float(np.max(np.abs(ends)))
 
 
 def _rsl_policy(config: TrainConfig, path: Path) -> Policy:

@@ -22,7 +22,9 @@ from policies.config import SelfPlayConfig
 
 
 def snapshot_rsl_actor(actor: torch.nn.Module) -> Opponent:
-    """The deterministic part of an rsl-rl MLPModel actor (normaliser + MLP) as an Opponent."""
+    """The deterministic part of an rsl-rl MLPModel actor (normaliser + MLP) as an Opponent (a deployed actor's clip
+    left to the environment, which clips the actions it applies to the same bound)."""
+    actor = getattr(actor, "bounded", actor)
     linear = [m for m in actor.mlp if isinstance(m, torch.nn.Linear)]
     layers = [(m.weight.detach().cpu().numpy().T, m.bias.detach().cpu().numpy()) for m in linear]
     n = layers[0][0].shape[0]

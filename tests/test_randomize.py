@@ -97,8 +97,8 @@ def test_sensor_biases_reach_the_noisy_state():
 
 
 def test_another_robot_model_keeps_its_own_joints_and_feet():
-    """On a reference model a run's randomisation no longer replaces the model's joint and foot parameters; a soccer
-    run refuses --robot (its scene has the project's OP3 only)."""
+    """On a reference model a run's randomisation no longer replaces the model's joint and foot parameters (a soccer
+    run's neither); a vision run refuses --robot (its ray camera draws the project's OP3 only)."""
     from policies.config import TrainConfig
     from policies.evaluate import MODEL_RANGES, on_robot
 
@@ -106,5 +106,8 @@ def test_another_robot_model_keeps_its_own_joints_and_feet():
     assert config.env.robot_model == "menagerie"
     assert all(getattr(config.env.randomization, k) is None for k in MODEL_RANGES)
     assert config.env.randomization.latency_s == COVERING["latency_s"]  # the rest as the run has it
+    soccer = on_robot(TrainConfig(task="soccer-1v1").resolved(), "menagerie")
+    assert soccer.env.robot_model == "menagerie" and soccer.env.randomization.joint_damping is None
+    assert soccer.env.randomization.latency_s is not None
     with pytest.raises(ValueError, match="project's op3 model only"):
-        on_robot(TrainConfig(task="soccer-1v1").resolved(), "menagerie")
+        on_robot(TrainConfig(task="soccer-1v1-vision").resolved(), "menagerie")

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from legged.cli import main
-from legged.robots import GO1
+from legged.robots import GO1, OP3
+from legged.robots.op3 import OP3_CTRL_DT
 from legged.robots.models import MAX_TIMESTEP, RobotModelError, reference_path, robot_model, step_for
 from legged.worlds.mjcf import pair_attributes
 from tests.menagerie import menagerie_model
@@ -30,32 +31,72 @@ def _fields(model: mujoco.MjModel, prefixes) -> dict:
             if k.startswith(prefixes) and not k.startswith(NAMES) and isinstance(getattr(model, k), np.ndarray)}
 
 
-@pytest.mark.parametrize("name", ["menagerie", "playground"])
-def test_reference_go1_changes_only_what_the_policy_needs(name):
-    path = reference_path(GO1, name)
-    robot = robot_model(GO1, name, CTRL_DT)
+@pytest.mark.parametrize("robot,name,ctrl_dt", [(GO1, "menagerie", CTRL_DT), (GO1, "playground", CTRL_DT),
+                                                  (OP3, "menagerie", OP3_CTRL_DT)])
+def test_reference_model_changes_only_what_the_policy_needs(robot, name, ctrl_dt):
+    spec, path = robot, reference_path(robot, name)
+    robot = robot_model(spec, name, ctrl_dt)
     file, ours = mujoco.MjModel.from_xml_path(str(path)), mujoco.MjModel.from_xml_path(str(robot.mjcf_path))
+    project = mujoco.MjModel.from_xml_path(str(spec.mjcf_path))
     mine, theirs = _fields(ours, UNCHANGED_PREFIXES), _fields(file, UNCHANGED_PREFIXES)
     assert mine.keys() == theirs.keys() and len(mine) > 50
+    # joints the file leaves unlimited take the project's (ROBOTIS') ranges; every other joint keeps the file's
+    unlimited = ~file.jnt_limited.astype(bool) & (file.jnt_type != mujoco.mjtJoint.mjJNT_FREE)
+    for j in np.nonzero(unlimited)[0]:
+        np.testing.assert_array_equal(ours.jnt_range[j], project.joint(file.joint(j).name).range)
+        assert ours.jnt_limited[j]
+    for key in ("jnt_range", "jnt_limited"):
+        mine[key], theirs[key] = mine[key][~unlimited], theirs[key][~unlimited]
     for key in mine:
         np.testing.assert_array_equal(mine[key], theirs[key], err_msg=f"{name}: {key} differs from the wheel's file")
     for field in ("integrator", "cone", "solver", "iterations", "ls_iterations", "impratio", "tolerance",
                   "noslip_iterations", "disableflags", "enableflags", "gravity", "o_solref", "o_solimp"):
         np.testing.assert_array_equal(getattr(ours.opt, field), getattr(file.opt, field), err_msg=field)
-    assert ours.opt.timestep == robot.timestep <= MAX_TIMESTEP
-    assert abs(CTRL_DT / robot.timestep - round(CTRL_DT / robot.timestep)) < 1e-9
-    assert robot.timestep == min(file.opt.timestep, MAX_TIMESTEP)  # 2 and 4 ms divide 20 ms
+    assert ours.opt.timestep == robot.timestep <= min(file.opt.timestep, MAX_TIMESTEP)
+    assert abs(ctrl_dt / robot.timestep - round(ctrl_dt / robot.timestep)) < 1e-9
     # the actuators are the policy's servos, in its joint order
-    project = mujoco.MjModel.from_xml_path(str(GO1.mjcf_path))
-    assert [ours.joint(j).id for j in GO1.joint_names] == list(ours.actuator_trnid[:, 0])
+    assert [ours.joint(j).id for j in spec.joint_names] == list(ours.actuator_trnid[:, 0])
     for field in ("actuator_gainprm", "actuator_biasprm", "actuator_forcerange", "actuator_ctrlrange",
                   "actuator_gaintype", "actuator_biastype"):
         np.testing.assert_array_equal(getattr(ours, field), getattr(project, field), err_msg=field)
-    # every foot and trunk geom the tasks watch exists; the trunk's geoms map onto the project's three
-    assert robot.feet_geoms == GO1.feet_geoms and robot.num_body_slots == len(GO1.body_geoms)
-    assert len(robot.body_slots) == len(robot.body_geoms) > 0
-    for g in robot.feet_geoms + robot.body_geoms + robot.thigh_geoms + robot.calf_geoms:
-        assert ours.geom(g).bodyid[0] == file.geom(ours.geom(g).id).bodyid[0]
+    # every geom the tasks watch exists on the body of the project geom it stands for; the trunk slots are the
+    # project's; read-outs (sites, head camera, sensors) and the free joint's name are there
+    assert robot.num_body_slots == len(spec.body_geoms) and len(robot.body_slots) == len(robot.body_geoms) > 0
+    assert {part for _, part in robot.parts} >= set(spec.feet_geoms)
+    for geom, part in robot.parts:
+        assert ours.geom(geom).bodyid[0] == file.geom(ours.geom(geom).id).bodyid[0]
+        assert ours.body(ours.geom(geom).bodyid[0]).name == project.body(project.geom(part).bodyid[0]).name
+    for site in spec.feet_sites + (spec.imu_site,):
+        assert ours.site(site).bodyid[0] == ours.body(project.body(project.site(site).bodyid[0]).name).id
+    assert {ours.sensor(i).name for i in range(ours.nsensor)} >= {project.sensor(i).name for i in range(project.nsensor)}
+    if spec.head_camera:
+        ours.camera(spec.head_camera)
+    assert ours.joint(0).name == project.joint(0).name  # the free joint
+
+
+def test_soccer_on_menagerie_op3():
+    """Every player is Menagerie's OP3 (two sole boxes per foot, its meshes, its own robot-robot contacts) at the
+    physics step of its file, and the game stands at kick-off."""
+    from legged.soccer.env import SoccerEnv
+    from legged.soccer.task_config import SoccerConfig
+
+    env = SoccerEnv(dataclasses.replace(SoccerConfig(), robot_model="menagerie"))
+    m = env.mj_model
+    assert env.robot.source == "menagerie" and env.n_substeps == 13 and m.opt.timestep == pytest.approx(0.025 / 13)
+    assert m.opt.iterations == 100  # Menagerie's solver (MuJoCo's defaults)
+    feet = [m.geom(f"home0/{g}").id for g in env.robot.feet_geoms]
+    assert len(feet) == 4 and {m.geom_bodyid[g] for g in feet} == {m.body("home0/l_ank_roll_link").id,
+                                                                 m.body("home0/r_ank_roll_link").id}
+    floor = env.layout.floor_geom
+    floor_pairs = {int(a + b - floor) for a, b in zip(m.pair_geom1, m.pair_geom2) if floor in (a, b)}
+    assert set(feet) <= floor_pairs
+    pair = next(i for i in range(m.npair) if {m.pair_geom1[i], m.pair_geom2[i]} == {feet[0], floor})
+    assert m.pair_dim[pair] == 3 and m.pair_solref[pair][0] == pytest.approx((0.004 + 0.02) / 2)  # MuJoCo's mix
+    data = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, data, 0)
+    for _ in range(env.n_substeps * 40):  # 1 s holding the default pose
+        mujoco.mj_step(m, data)
+    assert np.all(data.xpos[env.layout.torso_body, 2] > 0.22)
 
 
 def test_scene_pairs_make_the_contacts_of_mujocos_own_scene():
@@ -111,5 +152,8 @@ def test_unusable_models_are_one_line(tmp_path, capsys):
         assert main(["eval", WALKER, "--episodes", "1", "--physics", "native", *argv]) == 2
         err = capsys.readouterr().err
         assert message in err and err.count("\n") == 1, err
+    assert main(["drill", "walk", "--episodes", "1", "--robot", "playground"]) == 2  # the OP3 has no Playground model
+    err = capsys.readouterr().err
+    assert "no such model of op3" in err and err.count("\n") == 1, err
     with pytest.raises(RobotModelError, match="no such model"):
         robot_model(dataclasses.replace(GO1, name="go1"), "playgroundd", CTRL_DT)

@@ -13,12 +13,13 @@ from legged.tasks import make
 from legged.soccer import observe
 from legged.soccer.opponents import OpponentNet, network_opponent, opponent_actions, scripted_opponent
 from legged.soccer.pitch import kickoff_poses
+from legged.soccer.randomize import SoccerRandomization
 
 
 @pytest.fixture(scope="module")
 def game():
     """soccer-1v1 with a jitted batched reset and step and an unbatched transition."""
-    env = make("soccer-1v1")
+    env = make("soccer-1v1", randomization=SoccerRandomization())  # the nominal game (training randomises it)
 
     class Game:
         pass
@@ -211,20 +212,22 @@ def test_soccer_config_is_checked():
 
 def test_soccer_randomisation_is_one_function_for_both_engines():
     from legged.soccer.env import SoccerEnv
-    from legged.soccer.randomize import FIELDS, SoccerRandomization, randomized_fields, sample
+    from legged.soccer.randomize import OP3_RANDOMIZATION, randomized_fields, sample
     from legged.soccer.task_config import SoccerConfig
 
-    env = SoccerEnv(SoccerConfig(randomization=SoccerRandomization(enabled=True)))
+    env = SoccerEnv(SoccerConfig(randomization=OP3_RANDOMIZATION))
     m, where, ball = env.mj_model, env._dynamics, env.layout.ball_body
     assert where.ball_pairs.sum() >= 3 and where.floor_pairs.sum() >= 2 * 4  # 2 robots x (2 feet, torso, head)
     assert not where.robot_bodies[ball] and not where.robot_bodies[0]
-    draws = [sample(jax.random.PRNGKey(k), env.config.randomization, m, 0.2) for k in range(3)]
+    draws = [sample(jax.random.PRNGKey(k), env.config.randomization, m, 0.2, 2, 20, env.n_substeps) for k in range(3)]
     batch = jax.tree_util.tree_map(lambda *x: np.stack(x), *draws)
-    base = {k: np.array(getattr(m, k)) for k in FIELDS}
+    base = {k: np.array(getattr(m, k)) for k in env._base_fields}
     rows = randomized_fields(base, batch, where, xp=np)                       # native: rows of a batch
+    assert {"dof_damping", "dof_armature", "dof_frictionloss", "pair_solref"} <= set(rows)
     for k, dr in enumerate(draws):                                            # MJX: one episode under vmap
         one = randomized_fields({n: jnp.asarray(v) for n, v in base.items()}, dr, where)
-        for name in FIELDS:
+        assert set(one) == set(rows)
+        for name in one:
             np.testing.assert_allclose(np.asarray(one[name]), rows[name][k], rtol=1e-6)
     assert np.allclose(rows["body_mass"][:, ball], [float(d["ball_mass"]) for d in draws])
     assert np.allclose(rows["pair_friction"][:, where.ball_floor_pair, 2], [float(d["rolling"]) for d in draws])

@@ -161,9 +161,8 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
         check_port(request.host, request.port)
     if request.opponent is not None and request.trajectory is not None:
         raise ValueError("--opponent plays a new rollout; it cannot be combined with --trajectory")
-    if request.robot not in ("", "project") and (request.drill is not None or request.trajectory is not None):
-        raise ValueError("--robot chooses the robot model of a Go1 rollout; it cannot be combined with --drill or "
-                         "--trajectory")
+    if request.robot not in ("", "project") and request.trajectory is not None:
+        raise ValueError("--robot chooses the robot model of a new rollout; it cannot be combined with --trajectory")
     if request.drill is not None:
         return _resolve_drill(request, log)
     run_dir = _run_dir_of(request)
@@ -225,7 +224,7 @@ def _load_policy(run_dir: Path, checkpoint: str | None, log: Callable[[str], Non
 def _resolve_drill(request: ViewRequest, log: Callable[[str], None]) -> Resolved:
     """`legged view [RUN] --drill NAME`: the drill as `legged drill NAME --player RUN|placo` plays it."""
     from legged.soccer.drills import DRILLS, DrillConfig
-    from policies.drill import check_player, drill_env
+    from policies.drill import check_player, check_robot, drill_env
     from policies.run_dir import RunDir
 
     if request.drill not in DRILLS:
@@ -236,9 +235,10 @@ def _resolve_drill(request: ViewRequest, log: Callable[[str], None]) -> Resolved
     run_dir = _run_dir_of(request)
     drill, player = DrillConfig(name=request.drill), "placo" if run_dir is None else str(run_dir)
     check_player(player, drill)  # the run can do this drill (and is a run), before anything is built
+    check_robot(request.robot, request.physics)  # a bad model: one line, before a policy loads
     policy = None if run_dir is None else _load_policy(run_dir, request.checkpoint, log)
     log(f"[view] building the {request.drill} drill ...")
-    env = drill_env(player, drill, randomize=False)
+    env = drill_env(player, drill, randomize=False, robot=request.robot)
     task = "soccer-1v1" if run_dir is None else RunDir(run_dir).load_config().task
     if policy is not None:
         from policies.run_dir import check_compatible

@@ -24,6 +24,7 @@ from legged.envs.config import EnvConfig
 from legged.envs.contacts import MjxContactReader
 from legged.envs.physics import PhysicsView, Spawn
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
+from legged.envs.motor import motor_limits, within_motor_curve
 from legged.envs.rewards import penalty_terms
 from legged.envs.randomize import MODEL_DR, draw, randomized_fields
 from legged.robots.models import mjx_model_of, robot_model
@@ -38,6 +39,10 @@ class LeggedEnv(MjxEnv, abc.ABC):
 
     def __init__(self, robot: RobotSpec, terrain: Terrain, scene: SceneOptions, config: EnvConfig):
         robot = robot_model(robot, config.robot_model, config.ctrl_dt)
+        if len(robot.feet_geoms) != len(robot.feet_sites):
+            raise ValueError(f"{robot.source} {robot.name} model: {len(robot.feet_geoms)} foot collision geoms for "
+                             f"{len(robot.feet_sites)} feet; this task reads one per foot (name one per foot "
+                             f"{', '.join(robot.feet_sites)})")
         if robot.timestep is not None:  # the model's own physics step (a whole number per control step)
             config = dataclasses.replace(config, sim_dt=robot.timestep)
         self.robot, self.terrain, self.config, self.scene = robot, terrain, config, scene
@@ -54,6 +59,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
         self._trunk = m.body(robot.root_body).id
         self._default_pose = jnp.asarray(robot.default_pose, jnp.float32)
         self._ctrl_range = jnp.asarray(m.actuator_ctrlrange, jnp.float32)
+        self._force_limit, self._motor_speeds = motor_limits(m, robot, np.arange(m.nu), config.motor_curve)
         self._feet = np.array([m.geom(g).id for g in robot.feet_geoms])
         self._body_geoms = np.array([m.geom(g).id for g in robot.body_geoms])
         self._calf_bodies = np.array(list(dict.fromkeys(m.geom_bodyid[m.geom(g).id] for g in robot.calf_geoms)))
@@ -251,11 +257,22 @@ class LeggedEnv(MjxEnv, abc.ABC):
         """Joint targets for the control step; with action latency, a schedule (n_substeps, nu) whose first
         `latency` physics steps keep the previous targets."""
         targets = self.joint_targets(action)
+        if self.config.motor_curve:
+            targets = self._within_motor_curve(state, targets)
         latency = state.info["dr"].get("latency")
         if latency is None:
             return targets, action
         late = jnp.arange(self.n_substeps)[:, None] < latency
         return jnp.where(late, state.pipeline_state.ctrl, targets), action
+
+    def _within_motor_curve(self, state: State, targets: jax.Array) -> jax.Array:
+        """Joint targets whose PD torque, at the joint angles and velocities the control step starts from (with the
+        episode's gains), stays on the motors' side of their torque-speed lines (EnvConfig.motor_curve)."""
+        data, dr = state.pipeline_state, state.info["dr"]
+        q, qd = data.qpos[self._qadr], data.qvel[self._vadr]
+        kp = self._base_fields["actuator_gainprm"][:, 0] * dr["kp"] * dr["strength"]
+        kd = -self._base_fields["actuator_biasprm"][:, 2] * dr["kd"] * dr["strength"]
+        return within_motor_curve(targets, q, qd, kp, kd, self._force_limit, self._motor_speeds)
 
     # ----------------------------------------------------------------- shared transition
     def transition(self, state: State, data: PhysicsView, action: jax.Array) -> State:

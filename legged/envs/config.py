@@ -115,6 +115,10 @@ class EnvConfig:
     gyro_in_state: bool = False
     """`state` also holds the IMU's angular velocity (body frame; right after the projected gravity), as a real
     robot measures it. Off for the tasks whose shipped policies were trained without it; on for go1-rough."""
+    motor_curve: bool = False
+    """Limit each servo's torque to its motor's torque-speed line (RobotSpec.motor_speeds): the force limit at rest
+    falling to 0 at the motor's free speed when torque and motion agree (braking keeps the force limit); applied to the
+    joint targets at each control step from the joint velocities then. On for the Go1 tasks (legged.tasks)."""
     robot_model: str = "project"
     """Which model of the task's robot the physics runs: project (assets/robots), a reference (menagerie, playground)
     or an MJCF file of the same robot (legged.robots.models; `--robot` on eval, drill, navigate and view)."""

@@ -33,7 +33,17 @@ def draw(c: RandomizationConfig, rng: jax.Array, nbody: int, nu: int, sim_dt: fl
     dr = dict(friction=u(k[0], c.friction), mass_scale=u(k[1], c.link_mass_scale, (nbody,)),
               base_mass=u(k[2], c.base_mass_offset), com=u(k[3], (-c.com_offset, c.com_offset), (3,)),
               strength=u(k[4], c.motor_strength, (nu,)), kp=u(k[5], c.kp_scale), kd=u(k[6], c.kd_scale))
-    more = jax.random.split(jax.random.fold_in(rng, 1), 9)
+    return dict(dr, **draw_model(c, jax.random.fold_in(rng, 1), nu, sim_dt, n_substeps))
+
+
+def draw_model(c, rng: jax.Array, nu: int, sim_dt: float, n_substeps: int) -> dict:
+    """The model quantities of one robot that `c` (a RandomizationConfig or a SoccerRandomization) sets, drawn from
+    `rng`: its `nu` joints' damping, armature and friction loss, its feet's contact softness, time constant and
+    margin, the action latency in whole physics steps (of `sim_dt`, at most `n_substeps`), encoder offsets and IMU
+    biases (the quantities left unset, None or 0, are not drawn)."""
+    dr = {}
+    more = jax.random.split(rng, 9)
+    u = lambda key, r, shape=(): jax.random.uniform(key, shape, minval=r[0], maxval=r[1])
     ranges = (("damping", c.joint_damping, (nu,)), ("armature", c.joint_armature, (nu,)),
               ("frictionloss", c.joint_frictionloss, (nu,)), ("softness", c.contact_softness, ()),
               ("timeconst", c.contact_timeconst, ()), ("margin", c.contact_margin, ()))
@@ -68,17 +78,32 @@ def randomized_fields(base: dict, dr: dict, trunk: int, xp=jnp) -> dict:
     pairs = base["pair_friction"]
     friction = xp.concatenate([xp.broadcast_to(xp.asarray(dr["friction"])[..., None, None], mass.shape[:-1] + (len(pairs), 2)),
                                xp.broadcast_to(pairs[:, 2:], mass.shape[:-1] + pairs[:, 2:].shape)], axis=-1)
-    gain0, bias0 = base["actuator_gainprm"], base["actuator_biasprm"]
-    strength = dr["strength"]                                      # [..., nu]
-    kp = gain0[:, 0] * xp.asarray(dr["kp"])[..., None] * strength
-    kd = -bias0[:, 2] * xp.asarray(dr["kd"])[..., None] * strength
-    lead = strength.shape[:-1]
-    gain = xp.concatenate([kp[..., None], xp.broadcast_to(gain0[:, 1:], lead + gain0[:, 1:].shape)], axis=-1)
-    bias = xp.concatenate([xp.broadcast_to(bias0[:, :1], lead + (len(bias0), 1)), -kp[..., None], -kd[..., None],
-                           xp.broadcast_to(bias0[:, 3:], lead + bias0[:, 3:].shape)], axis=-1)
+    gain, bias = servo_fields(base, xp.asarray(dr["kp"])[..., None], xp.asarray(dr["kd"])[..., None], dr["strength"], xp)
     out = dict(body_mass=mass, body_inertia=inertia, body_ipos=ipos, pair_friction=friction,
                actuator_gainprm=gain, actuator_biasprm=bias)
-    dofs = base["joint_dofs"]                                      # [nu, nv] one-hot: policy joint -> dof
+    out.update(model_fields(base, dr, xp))
+    return out
+
+
+def servo_fields(base: dict, kp, kd, strength, xp=jnp) -> tuple:
+    """actuator_gainprm and actuator_biasprm of PD position servos whose proportional gains are scaled by `kp *
+    strength` and derivative gains by `kd * strength` (each broadcast against the actuators, [..., nu])."""
+    gain0, bias0 = base["actuator_gainprm"], base["actuator_biasprm"]
+    kp_gain = gain0[:, 0] * kp * strength                          # [..., nu]
+    lead = xp.shape(kp_gain)[:-1]
+    keep = lambda a, cols: xp.broadcast_to(a[:, cols], lead + a[:, cols].shape)
+    gain = xp.concatenate([kp_gain[..., None], keep(gain0, slice(1, None))], axis=-1)
+    bias = xp.concatenate([keep(bias0, slice(0, 1)), (bias0[:, 1] * kp * strength)[..., None],
+                           (bias0[:, 2] * kd * strength)[..., None], keep(bias0, slice(3, None))], axis=-1)
+    return gain, bias
+
+
+def model_fields(base: dict, dr: dict, xp=jnp) -> dict:
+    """The joint and foot-contact fields of the quantities `draw_model` drew: dof damping, armature and friction
+    loss of the drawn joints (`base["joint_dofs"]`: one-hot [nu, nv] from a drawn joint to its dof), the feet's
+    pairs' (`base["foot_pairs"]`) solimp, solref and margin."""
+    out = {}
+    dofs = base["joint_dofs"]
     for key, field in (("damping", "dof_damping"), ("armature", "dof_armature"), ("frictionloss", "dof_frictionloss")):
         if key in dr:
             out[field] = xp.where(dofs.sum(0) > 0, xp.asarray(dr[key]) @ dofs, base[field])
@@ -89,8 +114,10 @@ def randomized_fields(base: dict, dr: dict, trunk: int, xp=jnp) -> dict:
         out["pair_solimp"] = xp.where(feet, (1 - soft) * default + soft * target, base["pair_solimp"])
     if "timeconst" in dr:
         solref = base["pair_solref"]
-        timeconst = xp.broadcast_to(xp.asarray(dr["timeconst"])[..., None, None], lead + solref[:, :1].shape)
+        timeconst = xp.asarray(dr["timeconst"])[..., None, None]
+        lead = xp.shape(timeconst)[:-2]
         rest = xp.broadcast_to(solref[:, 1:], lead + solref[:, 1:].shape)
+        timeconst = xp.broadcast_to(timeconst, lead + solref[:, :1].shape)
         out["pair_solref"] = xp.where(feet, xp.concatenate([timeconst, rest], -1), solref)
     if "margin" in dr:
         out["pair_margin"] = xp.where(feet[:, 0], xp.asarray(dr["margin"])[..., None], base["pair_margin"])

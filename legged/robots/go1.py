@@ -26,6 +26,9 @@ GO1 = RobotSpec(
     # The paper's local planner picks body heights in 0.23-0.31 m; a little crouch below that is held
     # easily with Kp 20, a stretch above 0.32 m leaves the feet too little reach over bumps.
     body_height_range=(0.22, 0.32),
+    # Unitree's Go1 joint motor: 23.7 N m and 30.1 rad/s at the hip and thigh; through the knee's extra 1.5:1
+    # linkage 35.55 N m and 20.06 rad/s (the force limits are the MJCF's forcerange).
+    motor_speeds=(30.1, 30.1, 20.06) * 4,
     differences=(
         ("joint_damping", "0.5 N m s/rad on every joint, MuJoCo Playground's MJX Go1 value, which the shipped policies "
                           "trained with (Menagerie: 1 on abduction, 2 on hip and knee)"),

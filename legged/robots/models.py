@@ -9,8 +9,10 @@ friction loss, geoms and their contact parameters, collision meshes, pairs, solv
   gains, force limits and control ranges (the policy's servo; the file's actuators are replaced);
 - joint ranges the file leaves unlimited take the project model's (a policy's targets are clipped to them);
 - names the tasks read: the file's unnamed collision geoms get names (`<part>__<k>`), assigned to the
-  project's geom on the same body with the nearest centre (a foot, a trunk part, a thigh, ...); a foot site,
-  the IMU site or the head camera the file lacks is copied from the project model onto the same body;
+  project's geom on the same body with the nearest centre (a foot, a trunk part, a thigh, ...; several geoms
+  may stand for one, `RobotSpec.parts`); an unnamed free joint takes the project's name; a foot site, the IMU
+  site, the head camera or a site sensor (gyro, velocimeter, ...) the file lacks is copied from the project
+  model onto the same body (read-outs: they change no physics);
 - the physics step: the file's if it is at most `MAX_TIMESTEP` and divides the control period, otherwise the
   largest step that does both (a whole number of physics steps per control step).
 
@@ -109,6 +111,8 @@ def robot_model(robot: RobotSpec, choice: str, ctrl_dt: float) -> RobotSpec:
     for (body, k), name in names.items():
         edit.geom(body, k).set("name", name)
     edit.add_missing_frames(project, robot)
+    edit.name_free_joint(project, robot)
+    edit.add_missing_sensors(project)
     edit.set_actuators(project, robot)
     timestep = step_for(spec.option.timestep, ctrl_dt)
     edit.element("option").set("timestep", repr(timestep))
@@ -229,7 +233,7 @@ def _assign_parts(spec: mujoco.MjSpec, project: mujoco.MjModel, robot: RobotSpec
             owner[g] = best
     counts: dict[int, int] = {}
     out: dict[str, list] = {role: [] for role in roles}
-    slots, names = [], {}
+    slots, names, stands_for = [], {}, []
     for g in sorted(owner, key=lambda g: (owner[g], g)):
         p = owner[g]
         role, name = parts[p]
@@ -241,18 +245,15 @@ def _assign_parts(spec: mujoco.MjSpec, project: mujoco.MjModel, robot: RobotSpec
             body = int(model.geom_bodyid[g])
             names[(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body), g - int(model.body_geomadr[body]))] = geom
         out[role].append(geom)
+        stands_for.append((geom, name))
         if role == "body_geoms":
             slots.append(robot.body_geoms.index(name))
     for p, (role, name) in enumerate(parts):
         if role == "feet_geoms" and p not in owner.values():
             raise RobotModelError(f"--robot {label}: no foot geom for {name} (a geom named {name}, or a collision "
                                   f"geom on the body that holds it in the project's model)")
-    feet = out["feet_geoms"]
-    if len(feet) != len(robot.feet_geoms):
-        raise RobotModelError(f"--robot {label}: {len(feet)} foot geoms for {len(robot.feet_geoms)} feet; name one "
-                              f"collision geom per foot {', '.join(robot.feet_geoms)}")
     parts = dict({role: tuple(v) for role, v in out.items()}, body_slots=tuple(slots),
-                 body_slot_count=len(robot.body_geoms))
+                 body_slot_count=len(robot.body_geoms), parts=tuple(stands_for))
     return parts, names
 
 
@@ -305,6 +306,31 @@ class _Editor:
             ET.SubElement(self.body(body_of(c)), "camera", name=robot.head_camera, pos=fmt(c.pos), quat=fmt(c.quat),
                           fovy=repr(float(c.fovy[0])))
 
+    def name_free_joint(self, project: mujoco.MjModel, robot: RobotSpec) -> None:
+        """Give the root body's unnamed free joint the project model's name for it (tasks find the base by it)."""
+        root = self.body(robot.root_body)
+        joint = root.find("freejoint")
+        if joint is None:
+            joint = next((j for j in root.findall("joint") if j.get("type") == "free"), None)
+        free = [j for j in range(project.njnt) if project.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE]
+        if joint is not None and not joint.get("name") and free:
+            joint.set("name", project.joint(free[0]).name)
+
+    def add_missing_sensors(self, project: mujoco.MjModel) -> None:
+        """Copy the project model's site sensors (gyro, velocimeter, accelerometer, ...) whose names the file lacks."""
+        have = {s.name for s in self.spec.sensors}
+        block = None
+        for i in range(project.nsensor):
+            name = project.sensor(i).name
+            kind = _SITE_SENSORS.get(int(project.sensor_type[i]))
+            if name in have or kind is None or project.sensor_objtype[i] != mujoco.mjtObj.mjOBJ_SITE:
+                continue
+            if block is None:
+                block = self.root.find("sensor")
+                block = ET.SubElement(self.root, "sensor") if block is None else block
+            site = mujoco.mj_id2name(project, mujoco.mjtObj.mjOBJ_SITE, int(project.sensor_objid[i]))
+            ET.SubElement(block, kind, name=name, site=site)
+
     def set_actuators(self, project: mujoco.MjModel, robot: RobotSpec) -> None:
         """Replace the file's actuators by the project's servos, one per joint in policy order, and give the joints
         the file leaves unlimited the project's range."""
@@ -331,6 +357,8 @@ class _Editor:
                           forcerange=fmt(project.actuator_forcerange[j]))
 
 
+_SITE_SENSORS = {int(getattr(mujoco.mjtSensor, f"mjSENS_{k.upper()}")): k for k in (
+    "gyro", "velocimeter", "accelerometer", "magnetometer", "touch", "force", "torque")}
 _GAIN = {int(mujoco.mjtGain.mjGAIN_FIXED): "fixed", int(mujoco.mjtGain.mjGAIN_AFFINE): "affine"}
 _BIAS = {int(mujoco.mjtBias.mjBIAS_NONE): "none", int(mujoco.mjtBias.mjBIAS_AFFINE): "affine"}
 

@@ -45,6 +45,8 @@ OP3 = RobotSpec(
     body_height_range=(0.20, 0.27),
     arm_geoms=("l_upper_arm", "l_forearm", "r_upper_arm", "r_forearm"),
     head_camera="head_cam",
+    # Dynamixel XM430-W350 at 12 V: 46 rpm without load (its stall torque is the MJCF's 4.1 N m force limit).
+    motor_speeds=(46 * 2 * 3.141592653589793 / 60,) * 20,
     differences=(
         ("joint_damping", "none: Menagerie's 1.084 N m s/rad of joint damping is the D term of the servo here (Kd "
                           "1.084), so the two agree until the torque saturates and Kd randomisation acts on all of it"),

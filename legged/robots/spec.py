@@ -50,6 +50,9 @@ class RobotSpec:
     """Arm collision geoms (humanoids; empty for quadrupeds)."""
     head_camera: str | None = None
     """MJCF camera on the head that sees what the robot's own camera sees (None: the robot has none)."""
+    motor_speeds: tuple[float, ...] = ()
+    """Free speed of each joint's motor at the joint, rad/s, in `joint_names` order: its torque-speed line runs from
+    the actuator's force limit at rest to 0 at this speed (EnvConfig.motor_curve; empty: no curve)."""
     differences: tuple[tuple[str, str], ...] = ()
     """(quantity, reason) for each dynamics quantity in which `mjcf_path` differs from MuJoCo Menagerie's model of the
     robot: joint_damping, joint_armature, joint_frictionloss, foot_contact, body_contact, actuator_gains,
@@ -63,6 +66,9 @@ class RobotSpec:
     `body_geoms` each of `body_geoms` stands for (empty: one each), so body contact observations keep their size."""
     body_slot_count: int = 0
     """Number of those trunk contact slots (0: one per `body_geoms`)."""
+    parts: tuple[tuple[str, str], ...] = ()
+    """For a model other than the project's: (geom, project geom it stands for) for each of its geoms in the part
+    lists above (several may stand for one: Menagerie's OP3 has two sole boxes per foot); empty: each is its own."""
 
     @property
     def num_joints(self) -> int:
@@ -73,6 +79,12 @@ class RobotSpec:
     def num_body_slots(self) -> int:
         """Trunk contact slots of the observations (the project model's trunk geoms)."""
         return self.body_slot_count or len(self.body_geoms)
+
+    def geoms_of(self, names) -> tuple[str, ...]:
+        """This model's geoms that stand for the project model's geoms `names`, in that order."""
+        if not self.parts:
+            return tuple(names)
+        return tuple(g for name in names for g, part in self.parts if part == name)
 
     @property
     def collision_geoms(self) -> tuple[str, ...]:

@@ -168,7 +168,7 @@ class DrillEnv(LearnerView):
         else:
             action, walker_state = self.learner_actions(state, action)
         actions = jnp.stack([action, jnp.zeros_like(action)])
-        return self.game.joint_targets(actions), (actions, memory, walker_state, estimate_sq)
+        return self.game.servo_controls(state, self.game.joint_targets(actions)), (actions, memory, walker_state, estimate_sq)
 
     def transition(self, state: State, view: PhysicsView, actions) -> State:
         b = read_bodies(self.game.layout, view.qpos, view.qvel)

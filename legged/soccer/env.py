@@ -18,6 +18,9 @@ truncation. The engine verbs (legged.envs.physics) are shared by MJX stepping an
 
 from __future__ import annotations
 
+import dataclasses
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -25,7 +28,9 @@ from brax.envs.base import State
 from mujoco import mjx
 
 from legged.envs.api import MjxEnv
+from legged.envs.motor import motor_limits, within_motor_curve
 from legged.envs.physics import PhysicsView, Spawn
+from legged.robots.models import mjx_model_of, robot_model
 from legged.robots.op3 import OP3
 from legged.robots.spec import RobotSpec
 from legged.sensors.raycam import render
@@ -47,11 +52,14 @@ class SoccerEnv(MjxEnv):
     """A soccer game of `config.scene.players_per_team` OP3s per team, stepped in MJX."""
 
     def __init__(self, config: SoccerConfig = SoccerConfig(), robot: RobotSpec = OP3):
+        robot = robot_model(robot, config.robot_model, config.ctrl_dt)  # the OP3 model every player uses
+        if robot.timestep is not None:  # that model's own physics step (a whole number per control step)
+            config = dataclasses.replace(config, sim_dt=robot.timestep)
         self.config, self.robot = config, robot
         self.n_substeps = config.n_substeps
-        m = build_soccer_scene(config.scene)
+        m = build_soccer_scene(config.scene, robot)
         m.opt.timestep = config.sim_dt
-        self.mj_model, self.mjx_model = m, mjx.put_model(m)
+        self.mj_model = m
         self.layout = layout = SoccerLayout.from_model(m, robot)
         self.n_agents = layout.n_agents
         self._team = layout.team
@@ -65,9 +73,17 @@ class SoccerEnv(MjxEnv):
         joint_ids = np.searchsorted(m.jnt_qposadr, layout.joint_qpos_adr)
         self._q_range = jnp.asarray(m.jnt_range[joint_ids], jnp.float32)  # [A, J, 2]
         self._ball_radius = float(config.scene.ball_radius)
-        self._dynamics = randomize.SoccerDynamics.of(m, layout.ball_body)
+        self._dynamics = randomize.SoccerDynamics.of(m, layout)
         self._base_fields = {k: jnp.asarray(getattr(m, k)) for k in randomize.FIELDS}
+        self._force_limit, self._motor_speeds = motor_limits(m, robot, layout.actuator_ids, config.motor_curve)
         self.camera = soccer_camera(m, config.camera, layout) if config.vision else None
+
+    @functools.cached_property
+    def mjx_model(self):
+        """The game in MJX, built on first use (native physics never needs it); an error naming the cause for a
+        robot model MJX cannot run."""
+        with jax.ensure_compile_time_eval():  # concrete arrays even when first needed inside a traced function
+            return mjx_model_of(self.mj_model, self.robot)
 
     # ----------------------------------------------------------------- engine verbs (reset, step: MjxEnv)
     def spawn(self, rng: jax.Array, carry: dict | None = None) -> Spawn:
@@ -80,7 +96,8 @@ class SoccerEnv(MjxEnv):
             info["estimate_error"] = first_error(jax.random.fold_in(rng, 11), self.n_agents, self.n_agents - 1)
         if self.config.estimate_noise.enabled and self.config.estimate_noise.sight:
             info["ball_sighting"] = first_sighting(self.n_agents)
-        info["dr"] = randomize.sample(k_dr, self.config.randomization, self.mj_model, self.config.scene.ball_mass)
+        info["dr"] = randomize.sample(k_dr, self.config.randomization, self.mj_model, self.config.scene.ball_mass,
+                                      self.n_agents, self.action_size, self.n_substeps)
         return Spawn(qpos=qpos, qvel=qvel, ctrl=self._ctrl0, info=info)
 
     def mjx_model_for(self, info: dict):
@@ -107,8 +124,26 @@ class SoccerEnv(MjxEnv):
         return State(view, obs, jnp.zeros(self.n_agents), jnp.float32(0.0), metrics, info)
 
     def prepare(self, state: State, action: jax.Array) -> tuple[jax.Array, jax.Array]:
-        """PD targets of every actuator for actions [n_agents, action_size]."""
-        return self.joint_targets(action), action
+        """PD targets of every actuator for actions [n_agents, action_size] (a schedule with action latency)."""
+        return self.servo_controls(state, self.joint_targets(action)), action
+
+    def servo_controls(self, state: State, ctrl: jax.Array) -> jax.Array:
+        """What the servos get for the joint targets `ctrl`: with `motor_curve` the targets whose torque stays within
+        the motors' torque-speed lines (legged.envs.motor), and with action latency drawn a schedule (n_substeps, nu)
+        whose first physics steps keep each robot's previous targets (as many as its latency)."""
+        dr, data, ids = state.info["dr"], state.pipeline_state, self.layout.actuator_ids
+        if self.config.motor_curve:
+            gains = lambda key: dr[key][:, None] if key in dr else 1.0
+            kp = self._base_fields["actuator_gainprm"][ids, 0] * gains("kp") * dr["strength"][ids]
+            kd = -self._base_fields["actuator_biasprm"][ids, 2] * gains("kd") * dr["strength"][ids]
+            q, qd = data.qpos[self.layout.joint_qpos_adr], data.qvel[self.layout.joint_dof_adr]
+            ctrl = ctrl.at[ids].set(within_motor_curve(ctrl[ids], q, qd, kp, kd, self._force_limit,
+                                                       self._motor_speeds))
+        latency = dr.get("latency")
+        if latency is None:
+            return ctrl
+        steps = randomize.per_actuator(latency[:, None] * jnp.ones(self.action_size), self._dynamics)
+        return jnp.where(jnp.arange(self.n_substeps)[:, None] < steps, state.pipeline_state.ctrl, ctrl)
 
     @property
     def uses_cameras(self) -> bool:
@@ -139,7 +174,7 @@ class SoccerEnv(MjxEnv):
         both engines): the kinematics of the moved bodies are the engine's to compute."""
         c = self.config
         bad = data.diverged
-        action = jnp.where(bad, 0.0, action)
+        action = jnp.where(bad, 0.0, jnp.clip(action, -c.action_clip, c.action_clip))  # the actions applied
         info = dict(state.info)
         info["rng"], k_noise = jax.random.split(info["rng"])
         info["step"] = info["step"] + 1
@@ -203,6 +238,15 @@ class SoccerEnv(MjxEnv):
         return data, moved, goal
 
     # ----------------------------------------------------------------- observations
+    def _sensor_bias(self, dr: dict, size: int) -> jax.Array | float:
+        """[A, size]: each robot's constant sensor biases laid out like its proprioception (IMU's on the projected
+        gravity and the gyro, encoder offsets on the joint angles; 0. where none is drawn)."""
+        parts = (("gravity_bias", 3), ("gyro_bias", 3), ("encoder_offset", self.action_size))
+        if not any(k in dr for k, _ in parts):
+            return 0.0
+        bias = [dr[k] if k in dr else jnp.zeros((self.n_agents, n)) for k, n in parts]
+        return jnp.concatenate(bias + [jnp.zeros((self.n_agents, size - 6 - self.action_size))], -1)
+
     def _observe(self, data, info: dict, rng) -> dict:
         """Every player's observations; with `vision_sightings` or `vision_tracker` the camera's sightings
         (`sightings`) are also put in `info['sightings']`."""
@@ -225,6 +269,7 @@ class SoccerEnv(MjxEnv):
                                      jnp.full(self.action_size, n.joint_vel),
                                      jnp.zeros(state.shape[-1] - 6 - 2 * self.action_size)])
             state = state + scale * jax.random.uniform(rng, state.shape, minval=-1.0, maxval=1.0)
+        state = state + self._sensor_bias(info["dr"], state.shape[-1])
         fraction = info["step"].astype(jnp.float32) / c.episode_steps
         privileged = jnp.concatenate([clean, observe.privileged_features(b, self._team, info["score"], fraction)], -1)
         obs = {"state": state, "privileged_state": privileged}

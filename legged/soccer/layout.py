@@ -33,6 +33,18 @@ def _ids(model: mujoco.MjModel, obj: mujoco.mjtObj, names) -> np.ndarray:
     return np.array(out, dtype=np.int32)
 
 
+def _driving(model: mujoco.MjModel, joints: np.ndarray, prefix: str, robot: RobotSpec) -> np.ndarray:
+    """Ids of the actuators driving `joints` (a model's actuators are found by their joint, whatever their names)."""
+    joint_actuated = (model.actuator_trntype == mujoco.mjtTrn.mjTRN_JOINT)
+    out = []
+    for j, name in zip(joints, robot.joint_names):
+        found = np.nonzero(joint_actuated & (model.actuator_trnid[:, 0] == j))[0]
+        if len(found) != 1:
+            raise ValueError(f"the model has {len(found)} actuators on joint {prefix + name!r}; one is needed")
+        out.append(found[0])
+    return np.array(out, dtype=np.int32)
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class SoccerLayout:
     """Per-agent indices into one compiled soccer model (numpy arrays: static under `jax.jit`; compared and
@@ -115,7 +127,7 @@ class SoccerLayout:
         J, O = mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj
         roots = np.stack([_ids(model, J, [p + "root"]) for p in prefixes])[:, 0]
         joints = np.stack([_ids(model, J, [p + n for n in robot.joint_names]) for p in prefixes])
-        actuators = np.stack([_ids(model, O.mjOBJ_ACTUATOR, [p + n for n in robot.joint_names]) for p in prefixes])
+        actuators = np.stack([_driving(model, row, p, robot) for p, row in zip(prefixes, joints)])
         torso = _ids(model, O.mjOBJ_BODY, [p + robot.root_body for p in prefixes])
         if robot.head_camera is None:
             raise ValueError(f"robot {robot.name!r} has no head camera")

@@ -88,7 +88,7 @@ class LearnerView(MjxEnv):
             game.camera = game.camera.select([LEARNER])
         self.game, self.net, self.walker, self.teacher_prior = game, net, walker, teacher_prior
         self.config, self.robot = game.config, game.robot
-        self.mj_model, self.mjx_model = game.mj_model, game.mjx_model
+        self.mj_model = game.mj_model
         self.default_opponent = scripted_opponent(game.policy_state_size, self.player_action_size, hidden)
         self.estimate_parts = estimate_parts(game.layout.players_per_team)
         """Positions of the learner's estimate whose errors are reported (`estimates_world`)."""
@@ -170,7 +170,8 @@ class LearnerView(MjxEnv):
             walker_state = walker_state.at[LEARNER + 1:].set(stepped)
         actions = jnp.concatenate([mine[None], played])
         memory = state.info["players"].at[LEARNER + 1:].set(moved)
-        return self.game.joint_targets(actions), (actions, memory, walker_state, self._estimate_sq(state, action))
+        return (self.game.servo_controls(state, self.game.joint_targets(actions)),
+                (actions, memory, walker_state, self._estimate_sq(state, action)))
 
     def learner_actions(self, state: State, action: jax.Array) -> tuple[jax.Array, jax.Array]:
         """(the learner's joint actions (20,), every robot's walker state with the learner's stepped): its
@@ -320,6 +321,10 @@ class LearnerView(MjxEnv):
     @property
     def native_ray_camera(self):
         return self.game.native_ray_camera
+
+    @property
+    def mjx_model(self):
+        return self.game.mjx_model
 
     def mjx_model_for(self, info: dict):
         return self.game.mjx_model_for(info)

@@ -1,6 +1,11 @@
 """Domain randomisation of a soccer game: ground and ball friction, ball mass and rolling resistance, robot
-link masses and motor strength, sampled per episode and applied to the model's fields in both engines
-(jax.numpy for MJX models under vmap, numpy rows for native MuJoCo)."""
+link masses and motor strength, and where set each robot's servo gains, joint damping, armature and friction loss,
+foot contact, action latency, encoder offsets and IMU biases (the Go1's quantities: legged.envs.randomize), sampled
+per episode and applied to the model's fields in both engines (jax.numpy for MJX models under vmap, numpy rows for
+native MuJoCo).
+
+Quantities a config leaves unset (None, 0) are not drawn, so runs saved before they existed replay unchanged; their
+keys come from a separate stream (`fold_in(rng, 1)`) for the same reason."""
 
 from __future__ import annotations
 
@@ -11,9 +16,11 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
+from legged.envs.randomize import draw_model, model_fields, servo_fields
 from legged.soccer.scene import BALL, FLOOR_GEOM
 
-FIELDS = ("body_mass", "body_inertia", "pair_friction", "actuator_gainprm", "actuator_biasprm")
+FIELDS = ("body_mass", "body_inertia", "pair_friction", "actuator_gainprm", "actuator_biasprm", "dof_damping",
+          "dof_armature", "dof_frictionloss", "pair_solref", "pair_solimp", "pair_margin")
 """Model fields the randomisation changes."""
 
 
@@ -35,13 +42,54 @@ class SoccerRandomization:
     """Range of the scale of each robot link's mass (and inertia)."""
     motor_strength: tuple[float, float] = (0.85, 1.1)
     """Range of the scale of each servo's torque (its proportional and derivative gains together)."""
+    kp_scale: tuple[float, float] | None = None
+    """Range of the scale of each robot's proportional gains (all its joints together; None: not drawn)."""
+    kd_scale: tuple[float, float] | None = None
+    """Range of the scale of each robot's derivative gains (all its joints together; None: not drawn)."""
+    joint_damping: tuple[float, float] | None = None
+    """Range of each actuated joint's passive damping, N m s/rad, drawn per joint of each robot (None: the model's)."""
+    joint_armature: tuple[float, float] | None = None
+    """Range of each actuated joint's armature (rotor inertia), kg m^2, per joint of each robot (None: the model's)."""
+    joint_frictionloss: tuple[float, float] | None = None
+    """Range of each actuated joint's dry friction, N m, per joint of each robot (None: the model's)."""
+    contact_softness: tuple[float, float] | None = None
+    """Range of the feet's contact softness (legged.envs.config.RandomizationConfig), one draw per game: every robot
+    in a game is the same model (None: the model's)."""
+    contact_timeconst: tuple[float, float] | None = None
+    """Range of the feet's contact time constant (solref[0]) on the floor, seconds, one draw per game (None: the
+    model's)."""
+    contact_margin: tuple[float, float] | None = None
+    """Range of the feet's contact margin on the floor, metres, one draw per game (None: the model's)."""
+    latency_s: tuple[float, float] | None = None
+    """Range of each robot's action latency, seconds, drawn in whole physics steps: for that long after a control step
+    begins its previous joint targets still act (None: none)."""
+    encoder_offset: float = 0.0
+    """Each joint's angle reads off by a constant uniform in +-this for the episode, radians (0: none)."""
+    imu_bias: tuple[float, float] = (0.0, 0.0)
+    """Constant biases of each robot's IMU for the episode, uniform in +-these per axis: on the projected gravity
+    (unitless) and on the angular velocity (rad/s)."""
 
     def validate(self) -> None:
         """ValueError naming a range that is empty or non-positive."""
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
-            if isinstance(value, tuple) and not 0 <= value[0] <= value[1]:
+            if f.name == "imu_bias":
+                if min(value) < 0:
+                    raise ValueError(f"randomization.imu_bias must be non-negative, got {value}")
+            elif isinstance(value, tuple) and not 0 <= value[0] <= value[1]:
                 raise ValueError(f"randomization.{f.name} must be a range 0 <= low <= high, got {value}")
+        if self.encoder_offset < 0:
+            raise ValueError(f"randomization.encoder_offset must be non-negative, got {self.encoder_offset}")
+
+
+OP3_COVERING = dict(kp_scale=(0.9, 1.1), kd_scale=(0.75, 1.25), joint_damping=(0.0, 1.5), joint_armature=(0.03, 0.06),
+                    joint_frictionloss=(0.0, 0.06), contact_timeconst=(0.01, 0.025), latency_s=(0.0, 0.02),
+                    encoder_offset=0.02, imu_bias=(0.03, 0.05))
+"""Ranges that cover every reference model of the OP3 (legged.robots.models): passive joint damping from none (the
+project's, whose servo's D term holds it) to MuJoCo Menagerie's 1.084 N m s/rad (kept beside the servo's D term when a
+policy runs on Menagerie's model), armature and friction loss around both models' 0.045 and 0.03, the feet's contact
+time constant from Menagerie's 0.012 s (its 0.004 mixed with a plain floor) to the project's 0.02, with up to 20 ms
+of action latency and small sensor biases."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,19 +106,42 @@ class SoccerDynamics:
     """Bool per contact pair: the ball with anything."""
     ball_floor_pair: int
     """Index of the ball-floor pair (rolling friction)."""
+    joint_dofs: np.ndarray
+    """One-hot [n_agents * n_joints, nv]: each robot's joint (agent-major, policy order) to its dof."""
+    joint_actuators: np.ndarray
+    """One-hot [n_agents * n_joints, nu]: each robot's joint to its actuator."""
+    foot_pairs: np.ndarray
+    """1. for each contact pair of a robot's foot with the floor, [npair]."""
+    n_agents: int
+    """Robots in the game."""
 
     @classmethod
-    def of(cls, model: mujoco.MjModel, ball_body: int) -> "SoccerDynamics":
+    def of(cls, model: mujoco.MjModel, layout) -> "SoccerDynamics":
         names = [model.pair(i).name for i in range(model.npair)]
         ball = np.array([n.startswith(BALL + "~") or n.endswith("~" + BALL) for n in names])
         root = model.body_rootid
-        robot = (root != 0) & (root != root[ball_body]) & (np.arange(model.nbody) > 0)
-        return cls(robot_bodies=robot, ball_body=ball_body, floor_pairs=~ball, ball_pairs=ball,
-                   ball_floor_pair=names.index(f"{BALL}~{FLOOR_GEOM}"))
+        robot = (root != 0) & (root != root[layout.ball_body]) & (np.arange(model.nbody) > 0)
+        one_hot = lambda ids, n: np.eye(n, dtype=np.float32)[np.ravel(ids)]
+        feet = np.isin(model.pair_geom1, layout.feet_geoms) | np.isin(model.pair_geom2, layout.feet_geoms)
+        floor = (model.pair_geom1 == layout.floor_geom) | (model.pair_geom2 == layout.floor_geom)
+        return cls(robot_bodies=robot, ball_body=layout.ball_body, floor_pairs=~ball, ball_pairs=ball,
+                   ball_floor_pair=names.index(f"{BALL}~{FLOOR_GEOM}"),
+                   joint_dofs=one_hot(layout.joint_dof_adr, model.nv), joint_actuators=one_hot(layout.actuator_ids, model.nu),
+                   foot_pairs=(feet & floor).astype(np.float32), n_agents=layout.n_agents)
 
 
-def sample(rng: jax.Array, config: SoccerRandomization, model: mujoco.MjModel, nominal_ball_mass: float) -> dict:
-    """Randomisation parameters of one episode (nominal values when disabled)."""
+PER_GAME = ("softness", "timeconst", "margin")
+"""Quantities drawn once per game (the feet of one robot model), not per robot."""
+
+
+OP3_RANDOMIZATION = SoccerRandomization(enabled=True, **OP3_COVERING)
+"""The OP3 tasks' default randomisation for training: the earlier ranges and those covering the reference models."""
+
+
+def sample(rng: jax.Array, config: SoccerRandomization, model: mujoco.MjModel, nominal_ball_mass: float,
+           n_agents: int, n_joints: int, n_substeps: int) -> dict:
+    """Randomisation parameters of one episode (nominal values when disabled); per-robot quantities have a leading
+    agent axis ([n_agents], [n_agents, n_joints], ...)."""
     nb, nu = model.nbody, model.nu
     if not config.enabled:
         f = model.pair_friction
@@ -78,9 +149,33 @@ def sample(rng: jax.Array, config: SoccerRandomization, model: mujoco.MjModel, n
                     ball_mass=jnp.float32(nominal_ball_mass), mass_scale=jnp.ones(nb), strength=jnp.ones(nu))
     k = jax.random.split(rng, 6)
     u = lambda key, r, shape=(): jax.random.uniform(key, shape, minval=r[0], maxval=r[1])
-    return dict(floor=u(k[0], config.floor_friction), ball=u(k[1], config.ball_friction),
-                rolling=u(k[2], config.ball_rolling_friction), ball_mass=u(k[3], config.ball_mass),
-                mass_scale=u(k[4], config.link_mass_scale, (nb,)), strength=u(k[5], config.motor_strength, (nu,)))
+    dr = dict(floor=u(k[0], config.floor_friction), ball=u(k[1], config.ball_friction),
+              rolling=u(k[2], config.ball_rolling_friction), ball_mass=u(k[3], config.ball_mass),
+              mass_scale=u(k[4], config.link_mass_scale, (nb,)), strength=u(k[5], config.motor_strength, (nu,)))
+    more = jax.random.split(jax.random.fold_in(rng, 1), n_agents + 2)
+    if config.kp_scale is not None:
+        dr["kp"] = u(more[-2], config.kp_scale, (n_agents,))
+    if config.kd_scale is not None:
+        dr["kd"] = u(more[-1], config.kd_scale, (n_agents,))
+    robots = jax.vmap(lambda key: draw_model(config, key, n_joints, model.opt.timestep, n_substeps))(more[:n_agents])
+    dr.update({k: v[0] if k in PER_GAME else v for k, v in robots.items()})
+    return dr
+
+
+def robot_fields(base: dict, dr: dict, where: "SoccerDynamics", xp=jnp) -> dict:
+    """The joint and foot-contact fields of the per-robot quantities in `dr` (legged.envs.randomize.model_fields)."""
+    flat = lambda v: xp.reshape(v, xp.shape(v)[:-2] + (-1,))       # [..., A, J] -> [..., A * J]
+    drawn = {k: flat(dr[k]) if k in ("damping", "armature", "frictionloss") else dr[k]
+             for k in ("damping", "armature", "frictionloss") + PER_GAME if k in dr}
+    if not drawn:
+        return {}
+    return model_fields(dict(base, joint_dofs=where.joint_dofs, foot_pairs=where.foot_pairs), drawn, xp)
+
+
+def per_actuator(values, where: "SoccerDynamics", xp=jnp):
+    """[..., nu] from per-joint values of every robot [..., A, J] (each to its joint's actuator)."""
+    values = xp.asarray(values)
+    return xp.reshape(values, xp.shape(values)[:-2] + (-1,)) @ where.joint_actuators
 
 
 def randomized_fields(base: dict, dr: dict, where: SoccerDynamics, xp=jnp) -> dict:
@@ -96,12 +191,14 @@ def randomized_fields(base: dict, dr: dict, where: SoccerDynamics, xp=jnp) -> di
     rolling = xp.asarray(dr["rolling"])[..., None]
     is_ball_floor = np.arange(len(friction)) == where.ball_floor_pair  # torsion and rolling of the ball on grass
     friction = xp.stack([slide, slide] + [xp.where(is_ball_floor, rolling, f[..., c]) for c in (2, 3, 4)], axis=-1)
-    gain0, bias0 = base["actuator_gainprm"], base["actuator_biasprm"]
-    strength = dr["strength"]
-    gain = xp.concatenate([(gain0[:, 0] * strength)[..., None], xp.broadcast_to(gain0[:, 1:], lead + gain0[:, 1:].shape)],
-                          axis=-1)
-    bias = xp.concatenate([xp.broadcast_to(bias0[:, :1], lead + (len(bias0), 1)), (bias0[:, 1] * strength)[..., None],
-                           (bias0[:, 2] * strength)[..., None], xp.broadcast_to(bias0[:, 3:], lead + bias0[:, 3:].shape)],
-                          axis=-1)
-    return dict(body_mass=mass0 * scale, body_inertia=inertia0 * scale[..., None], pair_friction=friction,
-                actuator_gainprm=gain, actuator_biasprm=bias)
+    n_joints = where.joint_dofs.shape[0] // where.n_agents
+    gains = {}
+    for key in ("kp", "kd"):  # each robot's scale, on its actuators
+        if key in dr:
+            per_robot = xp.asarray(dr[key])[..., None] * xp.ones(n_joints)
+            gains[key] = per_actuator(per_robot, where, xp)
+    gain, bias = servo_fields(base, gains.get("kp", 1.0), gains.get("kd", 1.0), dr["strength"], xp)
+    out = dict(body_mass=mass0 * scale, body_inertia=inertia0 * scale[..., None], pair_friction=friction,
+               actuator_gainprm=gain, actuator_biasprm=bias)
+    out.update(robot_fields(base, dr, where, xp))
+    return out

@@ -1,9 +1,13 @@
 """The soccer scene composed in code with MjSpec: pitch, lines, goals, ball and OP3 teams.
 
-Every robot is a namespaced copy of assets/robots/op3.xml attached with `MjsFrame.attach_body`
-(prefix 'home0/', 'away1/', ...: its joints, actuators, sensors, sites and cameras are prefixed too),
-tinted with its team colour and placed at its kick-off pose. Contacts are explicit `<pair>`s only
-(every geom keeps contype = conaffinity = 0) so MJX evaluates just these:
+Every robot is a namespaced copy of the robot model (assets/robots/op3.xml, or another model of the OP3 that
+legged.robots.models prepared: `SoccerConfig.robot_model`) attached with `MjsFrame.attach_body` (prefix 'home0/',
+'away1/', ...: its joints, actuators, sensors, sites and cameras are prefixed too), tinted with its team colour and
+placed at its kick-off pose. Contacts with the world are explicit `<pair>`s (the project model's geoms keep
+contype = conaffinity = 0, so MJX evaluates just these; a model whose geoms collide by contype, as Menagerie's,
+keeps its self-contacts, each robot on collision bits of its own, and touches the other robots only with
+`robot_robot_contacts`), each the contact MuJoCo gives the robot's own geom (its condim, solref, solimp, margin:
+legged.worlds.mjcf.pair_attributes) with the scene's sliding friction:
 
 - each robot's feet, torso and head with the floor (torso and head: fallen robots lie on the floor), and
   with `limb_floor_contacts` its arms, thighs and shins too (what a robot getting up pushes with);
@@ -22,6 +26,7 @@ import mujoco
 import numpy as np
 
 from legged.robots.op3 import OP3
+from legged.robots.spec import RobotSpec
 from legged.soccer.config import TEAMS, SoccerSceneConfig
 from legged.soccer.layout import BALL, FLOOR_GEOM, SoccerLayout
 from legged.soccer.pitch import (
@@ -31,6 +36,7 @@ from legged.soccer.pitch import (
     pitch_lines,
     walls,
 )
+from legged.worlds.mjcf import pair_attributes
 
 TEAM_COLOUR_GEOMS = ("torso_visual", "head_visual")
 """OP3 visual geoms painted in the team colour (the rest of the robot keeps its dark servo colour)."""
@@ -96,19 +102,50 @@ def _add_ball(spec: mujoco.MjSpec, config: SoccerSceneConfig) -> None:
     geom.typeinertia = mujoco.mjtGeomInertia.mjINERTIA_SHELL  # a hollow ball: I = 2/3 m r^2
 
 
-def _add_robot(spec: mujoco.MjSpec, config: SoccerSceneConfig, team: int, player: int, pose) -> None:
-    child = mujoco.MjSpec.from_file(str(OP3.mjcf_path))
+def _team_geoms(child: mujoco.MjSpec, robot: RobotSpec) -> list:
+    """The visual geoms painted in the team colour: TEAM_COLOUR_GEOMS, or on a model without them the visual geoms
+    of the root body (a model's torso shell)."""
+    named = [child.geom(n) for n in TEAM_COLOUR_GEOMS if child.geom(n) is not None]
+    if named:
+        return named
+    return [g for g in child.body(robot.root_body).geoms if not (g.contype or g.conaffinity) and g.group != HIDDEN_GROUP]
+
+
+_BITS_PER_ROBOT = 8
+"""Collision bits each robot's own contype / conaffinity keep when robots do not touch (see `_own_bits`)."""
+
+
+def _own_bits(child: mujoco.MjSpec, agent: int, n_agents: int) -> None:
+    """Move a robot's contype / conaffinity bits (a model whose geoms collide by them, as Menagerie's) to bits of its
+    own, so that it keeps its self-contacts and passes through the other robots as the scene's robots do without
+    `robot_robot_contacts`. The file's bits must fit in `_BITS_PER_ROBOT` (ValueError otherwise)."""
+    used = [g for g in child.geoms if g.contype or g.conaffinity]
+    if not used:
+        return
+    widest = max(max(g.contype, g.conaffinity) for g in used)
+    if widest >> _BITS_PER_ROBOT or widest << (_BITS_PER_ROBOT * (n_agents - 1)) >= 2 ** 31:
+        raise ValueError(f"the robot model's contype / conaffinity bits do not fit in {_BITS_PER_ROBOT} bits for "
+                         f"{n_agents} robots; set robot_robot_contacts or use a model with fewer collision bits")
+    for g in used:
+        g.contype, g.conaffinity = g.contype << (_BITS_PER_ROBOT * agent), g.conaffinity << (_BITS_PER_ROBOT * agent)
+
+
+def _add_robot(spec: mujoco.MjSpec, config: SoccerSceneConfig, robot: RobotSpec, team: int, player: int,
+               pose) -> None:
+    child = mujoco.MjSpec.from_file(str(robot.mjcf_path))
     for key in list(child.keys):  # the robot's own keyframe covers one robot; the scene adds its own
         child.delete(key)
-    for name in TEAM_COLOUR_GEOMS:
-        child.geom(name).rgba = list(config.team_rgba(team))
-    if OP3.head_camera is not None:  # image right = the robot's right; image up tilted forward: looking down
+    if not config.robot_robot_contacts:
+        _own_bits(child, team * config.players_per_team + player, 2 * config.players_per_team)
+    for geom in _team_geoms(child, robot):
+        geom.rgba, geom.material = list(config.team_rgba(team)), ""
+    if robot.head_camera is not None:  # image right = the robot's right; image up tilted forward: looking down
         tilt = np.deg2rad(config.head_camera_tilt_deg)
-        camera = child.camera(OP3.head_camera)
+        camera = child.camera(robot.head_camera)
         camera.alt.xyaxes = [0.0, -1.0, 0.0, float(np.sin(tilt)), 0.0, float(np.cos(tilt))]
         if config.head_camera_fovy_deg:
             camera.fovy = config.head_camera_fovy_deg
-    root = child.body(OP3.root_body)
+    root = child.body(robot.root_body)
     root.pos = [0.0, 0.0, _QPOS0_HEIGHT]
     x, y, yaw = (float(v) for v in pose)
     frame = spec.worldbody.add_frame(pos=[x, y, 0.0], quat=_yaw_quat(yaw))
@@ -120,40 +157,55 @@ def _pair(spec, geom1, geom2, friction, condim=3):
                   friction=list(friction))
 
 
-def _add_contacts(spec: mujoco.MjSpec, config: SoccerSceneConfig, prefixes) -> None:
+def _robot_pair(spec, alone: mujoco.MjModel, prefix: str, geom: str, other: str, friction: float):
+    """The pair of robot geom `prefix + geom` with a world geom: the contact MuJoCo gives the robot model's own geom
+    against a plain one (legged.worlds.mjcf.pair_attributes), with sliding `friction`."""
+    a = pair_attributes(alone, geom, friction)
+    floats = lambda text: [float(x) for x in text.split()]
+    spec.add_pair(name=f"{prefix + geom}~{other}", geomname1=prefix + geom, geomname2=other, condim=int(a["condim"]),
+                  friction=floats(a["friction"]), solref=floats(a["solref"]), solimp=floats(a["solimp"]),
+                  margin=float(a["margin"]), gap=float(a["gap"]))
+
+
+def _add_contacts(spec: mujoco.MjSpec, config: SoccerSceneConfig, robot: RobotSpec, prefixes) -> None:
+    alone = mujoco.MjModel.from_xml_path(str(robot.mjcf_path))
     floor = (config.floor_friction, config.floor_friction, 0.005, 0.0001, 0.0001)
     ball = (config.ball_friction, config.ball_friction, 0.005, 0.0001, 0.0001)
-    limbs = OP3.arm_geoms + OP3.thigh_geoms + OP3.calf_geoms if config.limb_floor_contacts else ()
+    limbs = robot.arm_geoms + robot.thigh_geoms + robot.calf_geoms if config.limb_floor_contacts else ()
     for p in prefixes:
-        for geom in OP3.feet_geoms + OP3.body_geoms + limbs:
-            _pair(spec, p + geom, FLOOR_GEOM, floor)
+        for geom in robot.feet_geoms + robot.body_geoms + limbs:
+            _robot_pair(spec, alone, p, geom, FLOOR_GEOM, config.floor_friction)
     roll = config.ball_rolling_friction
     _pair(spec, BALL, FLOOR_GEOM, (config.ball_friction, config.ball_friction, roll, roll, roll), condim=6)
     for p in prefixes:
-        for geom in config.ball_robot_geoms:
-            _pair(spec, BALL, p + geom, ball)
+        for geom in robot.geoms_of(config.ball_robot_geoms):
+            _robot_pair(spec, alone, p, geom, BALL, config.ball_friction)
     for team in range(2):
         for box in goal_boxes(config, team):
             _pair(spec, BALL, box.name, ball)
     for name, _, _ in walls(config):
         _pair(spec, BALL, name, ball)
-    if config.robot_robot_contacts:
+    # a model whose geoms collide by contype / conaffinity (Menagerie's) already has its robot-robot contacts
+    if config.robot_robot_contacts and not np.any(alone.geom_contype | alone.geom_conaffinity):
         for i, a in enumerate(prefixes):
             for b in prefixes[i + 1:]:
-                _pair(spec, a + "torso", b + "torso", floor)
-                for fa in OP3.feet_geoms:
-                    for fb in OP3.feet_geoms:
+                for ta in robot.geoms_of(("torso",)):
+                    for tb in robot.geoms_of(("torso",)):
+                        _pair(spec, a + ta, b + tb, floor)
+                for fa in robot.feet_geoms:
+                    for fb in robot.feet_geoms:
                         _pair(spec, a + fa, b + fb, floor)
 
 
-def soccer_spec(config: SoccerSceneConfig = SoccerSceneConfig()) -> mujoco.MjSpec:
+def soccer_spec(config: SoccerSceneConfig = SoccerSceneConfig(), robot: RobotSpec = OP3) -> mujoco.MjSpec:
     """The scene as an MjSpec (not compiled; `build_soccer_scene` compiles it and adds the keyframe)."""
     spec = mujoco.MjSpec()
     n = config.players_per_team
     spec.modelname = f"soccer_{n}v{n}"
-    robot = mujoco.MjSpec.from_file(str(OP3.mjcf_path))
-    for field in ("timestep", "iterations", "ls_iterations", "cone", "integrator", "disableflags", "enableflags"):
-        setattr(spec.option, field, getattr(robot.option, field))  # the robot's solver settings (MJX-tuned)
+    own = mujoco.MjSpec.from_file(str(robot.mjcf_path))
+    for field in ("timestep", "iterations", "ls_iterations", "cone", "integrator", "disableflags", "enableflags",
+                  "noslip_iterations", "impratio", "tolerance", "ls_tolerance"):
+        setattr(spec.option, field, getattr(own.option, field))  # the robot model's solver settings
     extent = float(np.hypot(config.field_length / 2 + config.wall_margin, config.field_width / 2 + config.wall_margin))
     spec.stat.extent = extent
     spec.visual.map.znear = config.camera_znear / extent  # MuJoCo scales clip distances by the extent
@@ -167,27 +219,28 @@ def soccer_spec(config: SoccerSceneConfig = SoccerSceneConfig()) -> mujoco.MjSpe
     prefixes = []
     for a, pose in enumerate(kickoff_poses(config)):
         team, player = divmod(a, n)
-        _add_robot(spec, config, team, player, pose)
+        _add_robot(spec, config, robot, team, player, pose)
         prefixes.append(agent_prefix(team, player))
-    _add_contacts(spec, config, prefixes)
+    _add_contacts(spec, config, robot, prefixes)
     return spec
 
 
-def _compile(spec: mujoco.MjSpec, config: SoccerSceneConfig) -> mujoco.MjModel:
+def _compile(spec: mujoco.MjSpec, config: SoccerSceneConfig, robot: RobotSpec) -> mujoco.MjModel:
     model = spec.compile()
-    layout = SoccerLayout.from_model(model)
-    spec.add_key(name=KICKOFF_KEY, qpos=list(layout.kickoff_qpos(model, kickoff_poses(config))),
-                 ctrl=list(layout.default_ctrl(model)))
+    layout = SoccerLayout.from_model(model, robot)
+    spec.add_key(name=KICKOFF_KEY, qpos=list(layout.kickoff_qpos(model, kickoff_poses(config), robot)),
+                 ctrl=list(layout.default_ctrl(model, robot)))
     return spec.compile()
 
 
-def build_soccer_scene(config: SoccerSceneConfig = SoccerSceneConfig()) -> mujoco.MjModel:
-    """Compiled soccer model with a 'kickoff' keyframe (robots at their kick-off poses, ball on the spot)."""
-    return _compile(soccer_spec(config), config)
+def build_soccer_scene(config: SoccerSceneConfig = SoccerSceneConfig(), robot: RobotSpec = OP3) -> mujoco.MjModel:
+    """Compiled soccer model with a 'kickoff' keyframe (robots at their kick-off poses, ball on the spot); `robot`:
+    the OP3 model every player uses (legged.robots.models.robot_model prepares another than the project's)."""
+    return _compile(soccer_spec(config, robot), config, robot)
 
 
-def soccer_scene_xml(config: SoccerSceneConfig = SoccerSceneConfig()) -> str:
+def soccer_scene_xml(config: SoccerSceneConfig = SoccerSceneConfig(), robot: RobotSpec = OP3) -> str:
     """Standalone MJCF text of the scene (for viewers and saved runs; it compiles to the same model)."""
-    spec = soccer_spec(config)
-    _compile(spec, config)
+    spec = soccer_spec(config, robot)
+    _compile(spec, config, robot)
     return spec.to_xml()
