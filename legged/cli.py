@@ -105,7 +105,7 @@ def _evaluate_run(args, config, policy) -> dict:
     from legged.tasks import task_entry
     from policies.evaluate import (HELD_OUT_SEED_OFFSET, confined_eval_config, evaluate, held_out, latent_probe,
                                    ood_config, summarize)
-    from policies.run_dir import check_compatible
+    from policies.run_dir import check_policy
     from policies.training import build_env
 
     soccer = task_entry(config.task).kind == "soccer"
@@ -119,7 +119,7 @@ def _evaluate_run(args, config, policy) -> dict:
             env_config = dataclasses.replace(env_config, vision_tracker=True)
             report["tracker"] = True
         env = build_env(dataclasses.replace(config, env=ood_config(env_config) if args.ood else env_config))
-        check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+        check_policy(policy, env)
         if config.pilot:
             report["pilot"] = config.pilot
         samples = []
@@ -146,7 +146,7 @@ def _evaluate_run(args, config, policy) -> dict:
         for level in args.difficulty if args.difficulty is not None else config.env.difficulties:
             env_config = confined_eval_config(config.env, level, args.episodes, args.world_seed)
             env = build_env(dataclasses.replace(config, env=env_config), progress=not args.quiet)
-            check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+            check_policy(policy, env)
             finals = evaluate(env, policy, args.episodes, args.seed, args.physics,
                               args.num_envs or min(args.episodes, 64), args.threads or None,
                               progress=not args.quiet, per_world=True)

@@ -16,6 +16,7 @@ from legged.envs.flat import FlatConfig, FlatEnv
 from legged.envs.rough import RoughConfig, RoughEnv
 from legged.robots import GO1, OP3
 from legged.robots.spec import RobotSpec
+from legged.envs.config import NoiseConfig
 from legged.soccer.config import SoccerSceneConfig
 from legged.soccer.randomize import OP3_RANDOMIZATION
 from legged.soccer.skill_config import GetUpConfig, WalkSkillConfig
@@ -82,8 +83,9 @@ class TaskEntry:
 
 _GO1 = dict(motor_curve=True)
 """What the Go1 tasks' configs set beyond their classes' defaults (runs saved before it existed load without)."""
-_OP3 = dict(randomization=OP3_RANDOMIZATION)
-"""What the soccer tasks' configs set beyond SoccerConfig's defaults (the skills' configs hold it already)."""
+_OP3 = dict(randomization=OP3_RANDOMIZATION, noise=NoiseConfig(enabled=True))
+"""What the OP3 tasks' configs set beyond their classes' defaults: the randomisation that covers the reference models
+and observation noise (runs saved before them load without)."""
 _DEPLOYED = dict(robot_models=True, bounded_actions=True)
 """Tasks whose policies deploy: they run on other models of their robot, their actors' actions are bounded."""
 
@@ -98,8 +100,8 @@ TASKS: dict[str, TaskEntry] = {e.name: e for e in (
               "confined", **_DEPLOYED),
     TaskEntry("confined-skills", ConfinedEnv, ConfinedConfig(mode="skills", success_bootstraps=True, **_GO1), GO1,
               "confined", **_DEPLOYED),
-    TaskEntry("op3-walk", _walk_skill, WalkSkillConfig(), OP3, "locomotion", **_DEPLOYED),
-    TaskEntry("op3-getup", _getup_skill, GetUpConfig(), OP3, "locomotion", **_DEPLOYED),
+    TaskEntry("op3-walk", _walk_skill, WalkSkillConfig(**_OP3), OP3, "locomotion", **_DEPLOYED),
+    TaskEntry("op3-getup", _getup_skill, GetUpConfig(**_OP3), OP3, "locomotion", **_DEPLOYED),
     TaskEntry("soccer-1v1", _soccer, SoccerConfig(**_OP3), OP3, "soccer", **_DEPLOYED),
     TaskEntry("soccer-2v2", _soccer, SoccerConfig(scene=SoccerSceneConfig(players_per_team=2), **_OP3), OP3, "soccer",
               **_DEPLOYED),

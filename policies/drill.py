@@ -82,10 +82,10 @@ def drill_player(spec: str, env: DrillEnv, checkpoint: str | None = None):
     if spec in ("placo", SCRIPT):
         return BuiltInPlayer(env.action_size)
     from policies.policy_io import load_policy
-    from policies.run_dir import check_compatible
+    from policies.run_dir import check_policy
 
     policy, _ = load_policy(spec, checkpoint)
-    check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+    check_policy(policy, env)
     return policy
 
 

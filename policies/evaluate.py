@@ -40,7 +40,7 @@ def ood_config(env_config):
 
 
 MODEL_RANGES = ("joint_damping", "joint_armature", "joint_frictionloss", "contact_softness", "contact_timeconst",
-                "contact_margin")
+                "contact_margin", "contact_spin")
 """Randomisation ranges that replace a model's own values: off when a policy runs on another model (`on_robot`)."""
 
 

@@ -186,11 +186,16 @@ def deployed_actor(model: MLPModel) -> torch.nn.Module:
     return ConcatInputs(inner, model.obs_groups).eval()
 
 
-def latent_features(model: MLPModel, obs: TensorDict) -> torch.Tensor:
-    """What a probe reads from an actor: the mean z of a LatentActor, else the MLP's last hidden layer."""
+def latent_features(model: MLPModel, obs: TensorDict) -> torch.Tensor | None:
+    """What a probe reads from an actor: the mean z of a LatentActor, else the MLP's last hidden layer; None for
+    image and memory actors (their latent needs the images or the memory of the rollout, not one flat batch)."""
+    from rsl_rl.models import CNNModel
+
     with torch.no_grad():
         if isinstance(model, LatentActor):
             return model.encode(obs)[0]
+        if isinstance(model, CNNModel) or getattr(model, "is_recurrent", False):
+            return None
         x = MLPModel.get_latent(model, obs)
         for layer in list(model.mlp)[:-1]:
             x = layer(x)

@@ -24,7 +24,7 @@ from legged.worlds.maps import HeightMaps
 from legged.worlds.terrain import Terrain
 from planners.body_planner import PlannerConfig, PlanningError, plan_path, replan
 from policies.policy_io import actor_observation, load_policy
-from policies.run_dir import RunDirError, check_compatible
+from policies.run_dir import RunDirError, check_policy
 
 PATH_CAPACITY = 256
 """Most waypoints a (re)planned path may have in a navigation episode."""
@@ -118,7 +118,7 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
     env = ConfinedEnv(env_config, spec, terrain_of(maps, start, goal),
                       [plan.waypoints], path_capacity=PATH_CAPACITY)
     try:
-        check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+        check_policy(policy, env)
     except RunDirError as exc:
         raise NavigationError(str(exc)) from None
     vector = VectorEnv(env, 1, physics, threads)

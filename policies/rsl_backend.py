@@ -265,6 +265,8 @@ def probe_rollout(alg, layout: dict) -> dict:
     steps, envs = alg.storage.observations.batch_size[:2]
     obs = alg.storage.observations.flatten(0, 1)
     features = latent_features(alg.get_policy(), obs)
+    if features is None:
+        return {}
     targets = torch.cat([obs["privileged_state"][:, s] for s in privileged_slices(layout)], dim=-1)
     environments = np.tile(np.arange(envs), steps)  # fitted on the even environments, scored on the odd
     return {"probe_r2": probe_r2(features.numpy(), targets.numpy(), environments)}

@@ -38,6 +38,18 @@ def check_compatible(obs_sizes: dict, num_actions: int, env, source) -> None:
                           f"the environment gives {env.observation_dims()} and {env.action_size}")
 
 
+def check_policy(policy, env, source=None) -> None:
+    """Refuse a policy whose actor reads observations (the groups of `policy.inputs`) or gives actions of other sizes
+    than the environment's; the groups only critics read (privileged_state) may differ, as on another robot model
+    whose own parameters are not drawn."""
+    mine, theirs = env.observation_dims(), policy.obs_sizes
+    if any(mine.get(g) != theirs.get(g) for g in policy.inputs) or policy.num_actions != env.action_size:
+        read = {g: theirs.get(g) for g in policy.inputs}
+        raise RunDirError(f"checkpoint {source or policy.checkpoint} reads observations {read} and gives "
+                          f"{policy.num_actions} actions; the environment gives "
+                          f"{ {g: mine.get(g) for g in policy.inputs} } and {env.action_size}")
+
+
 class RunDir:
     """Files of one training run."""
 

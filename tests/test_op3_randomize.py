@@ -7,10 +7,12 @@ from __future__ import annotations
 import dataclasses
 
 import jax
+import jax.numpy as jnp
 import mujoco
 import numpy as np
 import pytest
 
+from legged.envs.physics import view_of_mjx
 from legged.robots import OP3
 from legged.robots.models import robot_model
 from legged.robots.op3 import OP3_CTRL_DT
@@ -69,12 +71,19 @@ def test_both_engines_apply_the_same_fields_and_latency_delays_each_robot():
     native = env.native_model_fields(jax.tree_util.tree_map(lambda x: np.asarray(x)[None], state.info), np.array([0]))
     assert {"dof_damping", "dof_armature", "pair_solref", "actuator_gainprm"} <= set(native)
     for field, value in native.items():
+        assert np.all(np.isfinite(value)), field
         np.testing.assert_allclose(value[0], np.asarray(getattr(mjx_model, field)), rtol=1e-6, err_msg=field)
     layout = env.layout
     np.testing.assert_allclose(np.asarray(mjx_model.dof_damping)[layout.joint_dof_adr], dr["damping"], rtol=1e-6)
     kp = np.asarray(mjx_model.actuator_gainprm)[layout.actuator_ids, 0]
     np.testing.assert_allclose(kp, OP3.kp * np.asarray(dr["kp"])[:, None] * np.asarray(dr["strength"])[layout.actuator_ids],
                                rtol=1e-5)
+    torso, base = layout.torso_body, env.mj_model
+    np.testing.assert_allclose(np.asarray(mjx_model.body_mass)[torso],
+                               base.body_mass[torso] * np.asarray(dr["mass_scale"])[torso] + np.asarray(dr["payload"]),
+                               rtol=1e-5)
+    np.testing.assert_allclose(np.asarray(mjx_model.body_ipos)[torso], base.body_ipos[torso] + np.asarray(dr["com"]),
+                               atol=1e-6)
     latency = np.array([0, 3])
     state.info["dr"] = dict(dr, latency=latency)
     previous = np.asarray(state.pipeline_state.ctrl)
@@ -163,3 +172,33 @@ def test_the_soccer_servos_stay_on_their_motors_torque_speed_lines():
         torque = kp * (np.asarray(ctrl)[ids] - q) - kd * speeds
         upper, lower = motor_torque_range(4.1, OP3.motor_speeds[0], speeds, np)
         assert np.all(torque <= upper + 1e-3) and np.all(torque >= lower - 1e-3)
+
+
+def test_the_critics_read_each_robots_drawn_model():
+    """The privileged observation ends with each robot's drawn model values (none for a game without them)."""
+    plain = SoccerEnv(SoccerConfig(randomization=SoccerRandomization(enabled=True)))
+    assert plain.observation_layout()["privileged_state"][-1][0] == "truth"
+    env = SoccerEnv(SoccerConfig(randomization=OP3_RANDOMIZATION))
+    state = jax.jit(env.reset)(jax.random.PRNGKey(6))
+    name, size = env.observation_layout()["privileged_state"][-1]
+    assert name == "model_dynamics" and state.obs["privileged_state"].shape[1] == plain_size(plain) + size
+    dr, tail = state.info["dr"], np.asarray(state.obs["privileged_state"][:, -size:])
+    np.testing.assert_allclose(tail[:, :20], dr["damping"], rtol=1e-6)
+    np.testing.assert_allclose(tail[:, -2], dr["kp"], rtol=1e-6)
+    assert np.allclose(tail[:, 61], np.asarray(dr["latency"]) * env.config.sim_dt)
+
+
+def plain_size(env) -> int:
+    return sum(k for _, k in env.observation_layout()["privileged_state"])
+
+
+def test_every_robot_is_pushed_at_the_push_steps():
+    env = SoccerEnv(SoccerConfig(randomization=OP3_RANDOMIZATION))
+    state = jax.jit(env.reset)(jax.random.PRNGKey(8))
+    period = int(round(OP3_RANDOMIZATION.push_interval_s / env.dt))
+    view = view_of_mjx(state.pipeline_state, jnp.zeros(0), False)
+    for step, expect in ((period, True), (period + 1, False)):  # the step the transition has counted
+        pushed_view, pushed = env._push(view, dict(state.info, step=np.int32(step)), jax.random.PRNGKey(0))
+        moved = np.asarray(pushed_view.qvel - view.qvel)[env.layout.root_dof_adr[:, None] + np.arange(2)]
+        assert bool(pushed) == expect and (np.abs(moved).max() > 0) == expect
+        assert np.abs(moved).max() <= OP3_RANDOMIZATION.push_velocity

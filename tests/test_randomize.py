@@ -39,6 +39,9 @@ def test_the_default_ranges_contain_every_reference_go1(name, model):
     solref, margin = float(foot["solref"].split()[0]), float(foot["margin"])
     assert COVERING["contact_timeconst"][0] <= solref <= COVERING["contact_timeconst"][1], (name, solref)
     assert COVERING["contact_margin"][0] <= margin <= COVERING["contact_margin"][1], (name, margin)
+    spin = 0.0 if foot["condim"] == "3" else 1.0  # condim 3 resists no spin or roll: scale 0 of the condim-6 terms
+    assert COVERING["contact_spin"][0] <= spin <= COVERING["contact_spin"][1], (name, foot["condim"])
+    assert foot["condim"] in ("3", "6")
     dmin = float(foot["solimp"].split()[0])  # softness 0 and 1 are the plain foot and Menagerie's soft one
     assert min(MUJOCO_SOLIMP[0], SOFT_SOLIMP[0]) <= dmin <= max(MUJOCO_SOLIMP[0], SOFT_SOLIMP[0])
     if name == "menagerie":
@@ -54,7 +57,7 @@ def test_draws_lie_in_their_ranges_and_the_latency_in_whole_steps():
     dr = jax.vmap(lambda k: draw(c, k, 14, 12, 0.005, 4, 0.8))(keys)
     for key, name in (("damping", "joint_damping"), ("armature", "joint_armature"),
                       ("frictionloss", "joint_frictionloss"), ("softness", "contact_softness"),
-                      ("timeconst", "contact_timeconst"), ("margin", "contact_margin")):
+                      ("timeconst", "contact_timeconst"), ("margin", "contact_margin"), ("spin", "contact_spin")):
         low, high = COVERING[name]
         assert float(dr[key].min()) >= low and float(dr[key].max()) <= high, key
     assert set(np.unique(dr["latency"]).tolist()) == {0, 1, 2, 3, 4}  # 0-20 ms in 5 ms steps
@@ -111,3 +114,21 @@ def test_another_robot_model_keeps_its_own_joints_and_feet():
     assert soccer.env.randomization.latency_s is not None
     with pytest.raises(ValueError, match="project's op3 model only"):
         on_robot(TrainConfig(task="soccer-1v1-vision").resolved(), "menagerie")
+
+
+def test_condim_is_drawn_through_the_feets_spin_friction():
+    """With contact_spin the feet's floor pairs are condim 6 (one shape for MJX) and the drawn scale multiplies their
+    torsional and rolling friction, in both engines' fields; a run without it keeps condim 3."""
+    from legged.tasks import make
+
+    env = make("go1-flat")
+    m = env.mj_model
+    feet = np.isin(m.pair_geom1, env._feet) | np.isin(m.pair_geom2, env._feet)
+    assert set(m.pair_dim[feet]) == {6} and set(m.pair_dim[~feet]) == {3}
+    info = env.spawn(jax.random.PRNGKey(3)).info
+    spin = float(info["dr"]["spin"])
+    fields = env.native_model_fields(jax.tree_util.tree_map(lambda x: np.asarray(x)[None], info), np.array([0]))
+    np.testing.assert_allclose(fields["pair_friction"][0][feet, 2:], m.pair_friction[feet, 2:] * spin, rtol=1e-6)
+    np.testing.assert_allclose(np.asarray(env.mjx_model_for(info).pair_friction), fields["pair_friction"][0], rtol=1e-6)
+    plain = make("go1-flat", randomization=dataclasses.replace(GO1_RANDOMIZATION, contact_spin=None)).mj_model
+    assert set(plain.pair_dim) == {3}

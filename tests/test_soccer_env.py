@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from legged.envs.config import NoiseConfig
 from legged.envs.physics import PhysicsView, view_of_mjx
 from legged.tasks import make
 from legged.soccer import observe
@@ -19,7 +20,7 @@ from legged.soccer.randomize import SoccerRandomization
 @pytest.fixture(scope="module")
 def game():
     """soccer-1v1 with a jitted batched reset and step and an unbatched transition."""
-    env = make("soccer-1v1", randomization=SoccerRandomization())  # the nominal game (training randomises it)
+    env = make("soccer-1v1", randomization=SoccerRandomization(), noise=NoiseConfig())  # the nominal game
 
     class Game:
         pass

@@ -38,7 +38,7 @@ def test_vision_observations_are_the_head_camera_images(vision_game):
         depth = obs[agent]["camera"][3] * game.config.camera.max_depth
         hit = native["depth"][i] < game.config.camera.max_depth
         assert hit.mean() > 0.2 and np.median(np.abs(depth - native["depth"][i])[hit]) < 0.01
-        assert infos[agent]["privileged_state"].shape == (97,)
+        assert infos[agent]["privileged_state"].shape == (97 + 68,)  # + its drawn model (OP3_RANDOMIZATION)
         assert set(infos[agent]["reward_terms"]) >= {"goal", "vel_to_ball", "fall"}
     assert all(isinstance(r, float) for r in rewards.values())
 
@@ -53,7 +53,7 @@ def test_2v2_game_has_four_agents_and_stays_finite_under_random_actions():
     env = SoccerParallelEnv("soccer-2v2")
     assert env.possible_agents == ["home0", "home1", "away0", "away1"]
     obs, infos = env.reset(seed=3)
-    assert all(o.shape == (88,) for o in obs.values()) and infos["away1"]["privileged_state"].shape == (105,)
+    assert all(o.shape == (88,) for o in obs.values()) and infos["away1"]["privileged_state"].shape == (105 + 68,)
     rng = np.random.default_rng(0)
     steps = 0
     while env.agents and steps < 8:
@@ -61,4 +61,4 @@ def test_2v2_game_has_four_agents_and_stays_finite_under_random_actions():
             {a: rng.uniform(-1, 1, 20).astype(np.float32) for a in env.agents})
         steps += 1
         assert all(np.all(np.isfinite(o)) for o in obs.values()) and len(rewards) == 4
-    assert env.state().shape == (4 * 105,)
+    assert env.state().shape == (4 * (105 + 68),)

@@ -170,6 +170,7 @@ def test_in_a_game_it_tracks_the_players_pose_on_the_pitch():
     from legged.envs.vector import VectorEnv
     from legged.soccer.learner import LearnerView
     from legged.soccer.observe import PROPRIO_SIZE, read_bodies
+    from legged.envs.config import NoiseConfig
     from legged.soccer.randomize import SoccerRandomization
     from legged.tasks import make
     from policies.policy_io import load_walker
@@ -177,7 +178,7 @@ def test_in_a_game_it_tracks_the_players_pose_on_the_pitch():
     config = make("soccer-1v1-vision").config  # the students' lens (70 degrees): it sees the goals more often
     config = dataclasses.replace(config, vision_tracker=True, vision_tracker_inputs=True,
                                  scene=dataclasses.replace(config.scene, head_camera_fovy_deg=70.0),
-                                 randomization=SoccerRandomization())  # the nominal game: no sensor biases
+                                 randomization=SoccerRandomization(), noise=NoiseConfig())  # no sensor errors
     view = LearnerView(make("soccer-1v1-vision", config),
                        walker=load_walker("assets/policies/op3-walker", prior="placo"))
     vector = VectorEnv.of(view, 2, "native", 1)

@@ -5,6 +5,7 @@ object or batch size would compile again (about a minute on 2 CPU cores).
 """
 
 import contextlib
+import types
 
 import numpy as np
 import pytest
@@ -18,7 +19,7 @@ from policies.evaluate import evaluate, summarize
 from policies.export import export_onnx
 from policies.policy_io import load_policy
 from policies.rsl_vecenv import RslVecEnv
-from policies.run_dir import RunDir, RunDirError, check_compatible
+from policies.run_dir import RunDir, RunDirError, check_compatible, check_policy
 from tests.conftest import BATCH, TINY_EPISODE_S as EPISODE_S, TINY_RUN as TINY
 
 
@@ -70,7 +71,7 @@ def trained_run(tiny_env, tmp_path_factory):
 def test_adapter_shapes_time_outs_and_zero_copy(tiny_env):
     venv = RslVecEnv(VectorEnv.of(tiny_env, BATCH, "native", 1), seed=0)
     obs = venv.get_observations()
-    assert obs["state"].shape == (BATCH, 42) and obs["privileged_state"].shape == (BATCH, 74 + 40)  # + the draws
+    assert obs["state"].shape == (BATCH, 42) and obs["privileged_state"].shape == (BATCH, 74 + 41)  # + the draws
     assert obs["state"].dtype == torch.float32
     assert obs["state"].data_ptr() == venv._obs["state"].unsafe_buffer_pointer()  # DLPack: no copy
     for k in range(10):
@@ -162,6 +163,13 @@ def test_bad_input_fails_before_training(tiny_env, tmp_path, capsys):
     assert "not a run directory" in capsys.readouterr().err
     with pytest.raises(RunDirError, match="expects observations"):
         check_compatible({"state": 261, "privileged_state": 295}, 12, tiny_env, tmp_path / "x.pt")
+    # a deployed policy is checked on what its actor reads: critics' inputs may differ (another robot model)
+    sizes = tiny_env.observation_dims()
+    policy = types.SimpleNamespace(inputs=("state",), obs_sizes=dict(sizes, privileged_state=1), num_actions=12,
+                                   checkpoint=tmp_path / "x.pt")
+    check_policy(policy, tiny_env)
+    with pytest.raises(RunDirError, match="reads observations"):
+        check_policy(types.SimpleNamespace(**dict(vars(policy), obs_sizes=dict(sizes, state=1))), tiny_env)
     assert main(["eval", str(tmp_path), "--episodes", "2"]) == 2
 
 

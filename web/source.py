@@ -95,12 +95,12 @@ class RolloutSource:
     def load_checkpoint(self, path: Path) -> None:
         """Swap the policy for a checkpoint of the run (errors leave the current one in place)."""
         from policies.policy_io import load_policy
-        from policies.run_dir import check_compatible
+        from policies.run_dir import check_policy
 
         if self.run_dir is None:
             raise ValueError("checkpoints can be loaded only when a run directory is shown")
         policy, _ = load_policy(self.run_dir, path)
-        check_compatible(policy.obs_sizes, policy.num_actions, self.env, path)
+        check_policy(policy, self.env, path)
         self.policy = policy
 
     def record(self, steps: int, seed: int, progress: Callable[[int, int], None] | None = None) -> Trajectory:
@@ -199,9 +199,9 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
     log(f"[view] building the {task} environment ...")
     env = _build_env(task, config)
     if policy is not None:
-        from policies.run_dir import check_compatible
+        from policies.run_dir import check_policy
 
-        check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+        check_policy(policy, env)
     opponent = None
     if request.opponent is not None:
         from policies.evaluate import soccer_opponent
@@ -241,9 +241,9 @@ def _resolve_drill(request: ViewRequest, log: Callable[[str], None]) -> Resolved
     env = drill_env(player, drill, randomize=False, robot=request.robot)
     task = "soccer-1v1" if run_dir is None else RunDir(run_dir).load_config().task
     if policy is not None:
-        from policies.run_dir import check_compatible
+        from policies.run_dir import check_policy
 
-        check_compatible(policy.obs_sizes, policy.num_actions, env, policy.checkpoint)
+        check_policy(policy, env)
     source = RolloutSource(env, f"{task} ({request.drill} drill)",
                            RecorderConfig(num_envs=request.num_envs, physics=request.physics), policy, run_dir,
                            builtin="placo player")

@@ -45,6 +45,8 @@ class LeggedEnv(MjxEnv, abc.ABC):
                              f"{', '.join(robot.feet_sites)})")
         if robot.timestep is not None:  # the model's own physics step (a whole number per control step)
             config = dataclasses.replace(config, sim_dt=robot.timestep)
+        if config.randomization.enabled and config.randomization.contact_spin is not None:
+            scene = dataclasses.replace(scene, foot_condim=6)  # spin and roll friction drawn on condim-6 feet
         self.robot, self.terrain, self.config, self.scene = robot, terrain, config, scene
         self.n_substeps = config.n_substeps
         self.mj_model = compile_scene(terrain, robot, scene)

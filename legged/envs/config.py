@@ -38,6 +38,11 @@ class RandomizationConfig:
     """Range of the feet's contact time constant (solref[0]), seconds (None: the model's own)."""
     contact_margin: tuple[float, float] | None = None
     """Range of the feet's contact margin, metres (None: the model's own)."""
+    contact_spin: tuple[float, float] | None = None
+    """Range of the scale of the feet's torsional and rolling friction (the condim-6 terms; MuJoCo's mix for the
+    robot's foot: Go1 0.02 and 0.01 m): with it set the feet's pairs with the floor are condim 6, and 0 resists no
+    spin or roll, as a condim-3 contact (the project's and Playground's Go1), 1 as Menagerie's condim-6 feet; a
+    static contact dimension with a drawn coefficient, so MJX keeps one model shape (None: the model's own contact)."""
     latency_s: tuple[float, float] | None = None
     """Range of the action latency, seconds, drawn in whole physics steps: for that long after a control step begins
     the previous joint targets still act (None: none)."""
@@ -58,10 +63,11 @@ SOFT_SOLIMP = (0.015, 1.0, 0.023, 0.5, 2.0)
 
 COVERING = dict(joint_damping=(0.3, 2.5), joint_armature=(0.004, 0.02), joint_frictionloss=(0.1, 1.2),
                 contact_softness=(0.0, 1.0), contact_timeconst=(0.01, 0.03), contact_margin=(0.0, 0.002),
+                contact_spin=(0.0, 1.5),
                 latency_s=(0.0, 0.02), encoder_offset=0.02, imu_bias=(0.03, 0.05))
 """Ranges of the model randomisation that covers every reference model of the Go1 (the project's, MuJoCo Menagerie's
 and MuJoCo Playground's: damping 0.5-2, armature 0.005-0.01, friction loss 0.2-1.0, plain to soft feet with 0-1 mm of
-margin; legged.robots.models), with up to 20 ms of action latency and small sensor biases. The Go1 tasks train with
+margin, condim 3 to condim 6; legged.robots.models), with up to 20 ms of action latency and small sensor biases. The Go1 tasks train with
 them by default (GO1_RANDOMIZATION); runs saved before they existed load without."""
 
 

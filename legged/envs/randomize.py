@@ -15,7 +15,7 @@ from legged.envs.config import SOFT_SOLIMP, RandomizationConfig
 
 MUJOCO_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
 """MuJoCo's default solimp: the hard end of RandomizationConfig.contact_softness."""
-MODEL_DR = ("damping", "armature", "frictionloss", "softness", "timeconst", "margin", "latency")
+MODEL_DR = ("damping", "armature", "frictionloss", "softness", "timeconst", "margin", "latency", "spin")
 """Randomised model quantities a teacher's privileged observation holds after the older ones (where drawn)."""
 
 
@@ -50,6 +50,8 @@ def draw_model(c, rng: jax.Array, nu: int, sim_dt: float, n_substeps: int) -> di
     for i, (key, r, shape) in enumerate(ranges):
         if r is not None:
             dr[key] = u(more[i], r, shape)
+    if getattr(c, "contact_spin", None) is not None:  # its own key: the others draw what they drew before it
+        dr["spin"] = u(jax.random.fold_in(rng, 2), c.contact_spin)
     if c.latency_s is not None:
         low, high = (min(int(round(t / sim_dt)), n_substeps) for t in c.latency_s)
         dr["latency"] = jax.random.randint(more[6], (), low, high + 1)
@@ -76,8 +78,11 @@ def randomized_fields(base: dict, dr: dict, trunk: int, xp=jnp) -> dict:
     mass = xp.where(is_trunk, mass_trunk[..., None], mass)
     ipos = base["body_ipos"] + is_trunk[:, None] * xp.asarray(dr["com"])[..., None, :]
     pairs = base["pair_friction"]
+    spin = pairs[:, 2:]                                            # torsional, rolling: the feet's scaled (condim 6)
+    if "spin" in dr:
+        spin = spin * xp.where(base["foot_pairs"][:, None] > 0, xp.asarray(dr["spin"])[..., None, None], 1.0)
     friction = xp.concatenate([xp.broadcast_to(xp.asarray(dr["friction"])[..., None, None], mass.shape[:-1] + (len(pairs), 2)),
-                               xp.broadcast_to(pairs[:, 2:], mass.shape[:-1] + pairs[:, 2:].shape)], axis=-1)
+                               xp.broadcast_to(spin, mass.shape[:-1] + pairs[:, 2:].shape)], axis=-1)
     gain, bias = servo_fields(base, xp.asarray(dr["kp"])[..., None], xp.asarray(dr["kd"])[..., None], dr["strength"], xp)
     out = dict(body_mass=mass, body_inertia=inertia, body_ipos=ipos, pair_friction=friction,
                actuator_gainprm=gain, actuator_biasprm=bias)

@@ -29,6 +29,7 @@ from mujoco import mjx
 
 from legged.envs.api import MjxEnv
 from legged.envs.motor import motor_limits, within_motor_curve
+from legged.envs.randomize import MODEL_DR
 from legged.envs.physics import PhysicsView, Spawn
 from legged.robots.models import mjx_model_of, robot_model
 from legged.robots.op3 import OP3
@@ -181,6 +182,7 @@ class SoccerEnv(MjxEnv):
         if c.estimate_noise.enabled:
             info["estimate_error"] = next_error(c.estimate_noise, info["estimate_error"],
                                                 jax.random.fold_in(k_noise, 11), self.dt)
+        data, pushed = self._push(data, info, jax.random.fold_in(k_noise, 13))
 
         b = observe.read_bodies(self.layout, data.qpos, data.qvel)
         call = rules.call_ball(c.scene, b.ball_pos)
@@ -199,7 +201,8 @@ class SoccerEnv(MjxEnv):
         ended = bad | ends_it | (c.end_on_goal & call.goal)
         done = ended | time_out
         info["truncation"] = (time_out & ~ended).astype(jnp.float32)
-        data, info["teleported"], kickoff = self._restart(data, call, done)
+        data, restarted, kickoff = self._restart(data, call, done)
+        info["teleported"] = restarted | pushed  # the engine loads the moved bodies and changed velocities
         info["players"] = jnp.where(kickoff, initial_memory(self.n_agents), info["players"])  # scripts start over
         # robots stand still at their kick-off poses: actions, walkers' clocks, filters and get-ups start over
         info["last_action"] = jnp.where(kickoff, 0.0, info["last_action"])
@@ -219,6 +222,16 @@ class SoccerEnv(MjxEnv):
         obs = self._observe(data, info, k_noise)
         return state.replace(pipeline_state=data, obs=obs, reward=reward.astype(jnp.float32),
                              done=done.astype(jnp.float32), metrics=metrics, info=info)
+
+    def _push(self, data: PhysicsView, info: dict, rng: jax.Array) -> tuple[PhysicsView, jax.Array]:
+        """(view, pushed): every `push_interval_s` each robot gets its own random horizontal velocity kick."""
+        c = self.config.randomization
+        if not (c.enabled and c.push_interval_s > 0 and c.push_velocity > 0):
+            return data, jnp.bool_(False)
+        pushed = (info["step"] % max(1, int(round(c.push_interval_s / self.dt))) == 0) & ~data.diverged
+        kick = jax.random.uniform(rng, (self.n_agents, 2), minval=-c.push_velocity, maxval=c.push_velocity)
+        adr = self.layout.root_dof_adr[:, None] + np.arange(2)
+        return data.replace(qvel=data.qvel.at[adr].add(jnp.where(pushed, kick, 0.0))), pushed
 
     def _restart(self, data: PhysicsView, call: rules.BallCall, done) -> tuple[PhysicsView, jax.Array, jax.Array]:
         """Kick-off after a goal, ball back in play after it left the pitch (not when the episode ends); the
@@ -271,7 +284,8 @@ class SoccerEnv(MjxEnv):
             state = state + scale * jax.random.uniform(rng, state.shape, minval=-1.0, maxval=1.0)
         state = state + self._sensor_bias(info["dr"], state.shape[-1])
         fraction = info["step"].astype(jnp.float32) / c.episode_steps
-        privileged = jnp.concatenate([clean, observe.privileged_features(b, self._team, info["score"], fraction)], -1)
+        privileged = jnp.concatenate([clean, observe.privileged_features(b, self._team, info["score"], fraction)]
+                                     + self._model_dynamics(info["dr"]), -1)
         obs = {"state": state, "privileged_state": privileged}
         if c.vision:  # what the state players read, for their students' teachers (legged distill)
             obs["features"] = clean
@@ -308,8 +322,25 @@ class SoccerEnv(MjxEnv):
             state = state + [("attack_direction", observe.HEADING_SIZE)]
         if self.config.vision_sightings:
             state = state + [(f"{name}_sighting", SIGHTING_SIZE) for name in SIGHTED]
+        drawn = jax.eval_shape(lambda k: self.spawn(k).info["dr"], jax.random.PRNGKey(0))
+        dynamics = sum(int(np.prod(drawn[k].shape[1:])) for k in self._dynamics_keys(drawn))
         return {"state": state, "privileged_state": [(f"state/{n}", k) for n, k in features]
-                + [("truth", observe.PRIVILEGED_SIZE)]}
+                + [("truth", observe.PRIVILEGED_SIZE)] + ([("model_dynamics", dynamics)] if dynamics else [])}
+
+    @staticmethod
+    def _dynamics_keys(dr: dict) -> list[str]:
+        """The drawn model values the privileged observation holds, in order (none for runs saved before them)."""
+        return [k for k in MODEL_DR + ("payload", "com", "kp", "kd") if k in dr]
+
+    def _model_dynamics(self, dr: dict) -> list:
+        """[[A, k], ...]: each robot's drawn model values, for critics and teachers (after everything older): its
+        joints' damping, armature and friction loss, the feet's contact (one per game), its latency in seconds, its
+        torso's payload and centre-of-mass shift, its Kp and Kd scales."""
+        parts = []
+        for key in self._dynamics_keys(dr):
+            value = jnp.asarray(dr[key], jnp.float32) * (self.config.sim_dt if key == "latency" else 1.0)
+            parts.append(jnp.broadcast_to(value, (self.n_agents,)).reshape(self.n_agents, 1) if value.ndim < 2 else value)
+        return parts
 
     @property
     def policy_state_size(self) -> int:

@@ -1,11 +1,11 @@
 """Domain randomisation of a soccer game: ground and ball friction, ball mass and rolling resistance, robot
-link masses and motor strength, and where set each robot's servo gains, joint damping, armature and friction loss,
-foot contact, action latency, encoder offsets and IMU biases (the Go1's quantities: legged.envs.randomize), sampled
-per episode and applied to the model's fields in both engines (jax.numpy for MJX models under vmap, numpy rows for
-native MuJoCo).
+link masses and motor strength, and where set each robot's payload and centre of mass, servo gains, joint damping,
+armature and friction loss, foot contact, action latency, encoder offsets, IMU biases and pushes (the Go1's
+quantities: legged.envs.randomize), sampled per episode and applied to the model's fields in both engines (jax.numpy
+for MJX models under vmap, numpy rows for native MuJoCo).
 
 Quantities a config leaves unset (None, 0) are not drawn, so runs saved before they existed replay unchanged; their
-keys come from a separate stream (`fold_in(rng, 1)`) for the same reason."""
+keys come from separate streams (`fold_in(rng, 1)`, `fold_in(rng, 2)`) for the same reason."""
 
 from __future__ import annotations
 
@@ -19,8 +19,8 @@ import numpy as np
 from legged.envs.randomize import draw_model, model_fields, servo_fields
 from legged.soccer.scene import BALL, FLOOR_GEOM
 
-FIELDS = ("body_mass", "body_inertia", "pair_friction", "actuator_gainprm", "actuator_biasprm", "dof_damping",
-          "dof_armature", "dof_frictionloss", "pair_solref", "pair_solimp", "pair_margin")
+FIELDS = ("body_mass", "body_inertia", "body_ipos", "pair_friction", "actuator_gainprm", "actuator_biasprm",
+          "dof_damping", "dof_armature", "dof_frictionloss", "pair_solref", "pair_solimp", "pair_margin")
 """Model fields the randomisation changes."""
 
 
@@ -42,6 +42,10 @@ class SoccerRandomization:
     """Range of the scale of each robot link's mass (and inertia)."""
     motor_strength: tuple[float, float] = (0.85, 1.1)
     """Range of the scale of each servo's torque (its proportional and derivative gains together)."""
+    payload: tuple[float, float] | None = None
+    """Range of the mass added to each robot's torso, kg (None: not drawn)."""
+    com_offset: float = 0.0
+    """Each robot's torso centre of mass moves by up to +-this per axis, metres (0: not drawn)."""
     kp_scale: tuple[float, float] | None = None
     """Range of the scale of each robot's proportional gains (all its joints together; None: not drawn)."""
     kd_scale: tuple[float, float] | None = None
@@ -68,6 +72,10 @@ class SoccerRandomization:
     imu_bias: tuple[float, float] = (0.0, 0.0)
     """Constant biases of each robot's IMU for the episode, uniform in +-these per axis: on the projected gravity
     (unitless) and on the angular velocity (rad/s)."""
+    push_interval_s: float = 0.0
+    """Seconds between random pushes of every robot (0: none); all are pushed at the same steps of the episode."""
+    push_velocity: float = 0.0
+    """A push adds a horizontal velocity uniform in +-this per axis to each robot's torso, m/s."""
 
     def validate(self) -> None:
         """ValueError naming a range that is empty or non-positive."""
@@ -76,20 +84,26 @@ class SoccerRandomization:
             if f.name == "imu_bias":
                 if min(value) < 0:
                     raise ValueError(f"randomization.imu_bias must be non-negative, got {value}")
+            elif f.name == "payload" and value is not None:
+                if not value[0] <= value[1]:
+                    raise ValueError(f"randomization.payload must be a range low <= high, got {value}")
             elif isinstance(value, tuple) and not 0 <= value[0] <= value[1]:
                 raise ValueError(f"randomization.{f.name} must be a range 0 <= low <= high, got {value}")
-        if self.encoder_offset < 0:
-            raise ValueError(f"randomization.encoder_offset must be non-negative, got {self.encoder_offset}")
+        for name in ("com_offset", "encoder_offset", "push_interval_s", "push_velocity"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"randomization.{name} must be non-negative, got {getattr(self, name)}")
 
 
-OP3_COVERING = dict(kp_scale=(0.9, 1.1), kd_scale=(0.75, 1.25), joint_damping=(0.0, 1.5), joint_armature=(0.03, 0.06),
+OP3_COVERING = dict(payload=(-0.2, 0.4), com_offset=0.01, kp_scale=(0.9, 1.1), kd_scale=(0.75, 1.25),
+                    joint_damping=(0.0, 2.5), joint_armature=(0.03, 0.06),
                     joint_frictionloss=(0.0, 0.06), contact_timeconst=(0.01, 0.025), latency_s=(0.0, 0.02),
-                    encoder_offset=0.02, imu_bias=(0.03, 0.05))
+                    encoder_offset=0.02, imu_bias=(0.03, 0.05), push_interval_s=10.0, push_velocity=0.15)
 """Ranges that cover every reference model of the OP3 (legged.robots.models): passive joint damping from none (the
 project's, whose servo's D term holds it) to MuJoCo Menagerie's 1.084 N m s/rad (kept beside the servo's D term when a
 policy runs on Menagerie's model), armature and friction loss around both models' 0.045 and 0.03, the feet's contact
 time constant from Menagerie's 0.012 s (its 0.004 mixed with a plain floor) to the project's 0.02, with up to 20 ms
-of action latency and small sensor biases."""
+of action latency, small sensor biases and a push of up to 0.15 m/s (the walker's pace) every 10 s; a payload of
+-0.2 to +0.4 kg on the 1.35 kg torso with its centre of mass moved up to 1 cm."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -114,6 +128,8 @@ class SoccerDynamics:
     """1. for each contact pair of a robot's foot with the floor, [npair]."""
     n_agents: int
     """Robots in the game."""
+    torso_bodies: np.ndarray
+    """One-hot [n_agents, nbody]: each robot's torso body."""
 
     @classmethod
     def of(cls, model: mujoco.MjModel, layout) -> "SoccerDynamics":
@@ -127,7 +143,8 @@ class SoccerDynamics:
         return cls(robot_bodies=robot, ball_body=layout.ball_body, floor_pairs=~ball, ball_pairs=ball,
                    ball_floor_pair=names.index(f"{BALL}~{FLOOR_GEOM}"),
                    joint_dofs=one_hot(layout.joint_dof_adr, model.nv), joint_actuators=one_hot(layout.actuator_ids, model.nu),
-                   foot_pairs=(feet & floor).astype(np.float32), n_agents=layout.n_agents)
+                   foot_pairs=(feet & floor).astype(np.float32), n_agents=layout.n_agents,
+                   torso_bodies=one_hot(layout.torso_body, model.nbody))
 
 
 PER_GAME = ("softness", "timeconst", "margin")
@@ -153,6 +170,11 @@ def sample(rng: jax.Array, config: SoccerRandomization, model: mujoco.MjModel, n
               rolling=u(k[2], config.ball_rolling_friction), ball_mass=u(k[3], config.ball_mass),
               mass_scale=u(k[4], config.link_mass_scale, (nb,)), strength=u(k[5], config.motor_strength, (nu,)))
     more = jax.random.split(jax.random.fold_in(rng, 1), n_agents + 2)
+    body = jax.random.split(jax.random.fold_in(rng, 2), 2)
+    if config.payload is not None:
+        dr["payload"] = u(body[0], config.payload, (n_agents,))
+    if config.com_offset:
+        dr["com"] = u(body[1], (-config.com_offset, config.com_offset), (n_agents, 3))
     if config.kp_scale is not None:
         dr["kp"] = u(more[-2], config.kp_scale, (n_agents,))
     if config.kd_scale is not None:
@@ -198,7 +220,15 @@ def randomized_fields(base: dict, dr: dict, where: SoccerDynamics, xp=jnp) -> di
             per_robot = xp.asarray(dr[key])[..., None] * xp.ones(n_joints)
             gains[key] = per_actuator(per_robot, where, xp)
     gain, bias = servo_fields(base, gains.get("kp", 1.0), gains.get("kd", 1.0), dr["strength"], xp)
-    out = dict(body_mass=mass0 * scale, body_inertia=inertia0 * scale[..., None], pair_friction=friction,
+    mass = mass0 * scale
+    if "payload" in dr:  # each torso's added mass, its inertia scaled with it
+        added = xp.asarray(dr["payload"]) @ where.torso_bodies                 # [..., nbody]
+        scale = scale * xp.where(added != 0, (mass + added) / xp.where(mass > 0, mass, 1.0), 1.0)
+        mass = mass + added
+    out = dict(body_mass=mass, body_inertia=inertia0 * scale[..., None], pair_friction=friction,
                actuator_gainprm=gain, actuator_biasprm=bias)
+    if "com" in dr:
+        out["body_ipos"] = base["body_ipos"] + xp.swapaxes(xp.swapaxes(xp.asarray(dr["com"]), -1, -2)
+                                                           @ where.torso_bodies, -1, -2)
     out.update(robot_fields(base, dr, where, xp))
     return out

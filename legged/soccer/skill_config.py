@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 from legged.soccer.config import SoccerSceneConfig
-from legged.soccer.randomize import OP3_RANDOMIZATION, SoccerRandomization
+from legged.soccer.randomize import SoccerRandomization
 from legged.soccer.task_config import SoccerConfig
 
 LEG_JOINTS = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ank_pitch", "ank_roll")
@@ -28,9 +28,9 @@ class SkillConfig(SoccerConfig):
 
     skill_penalties: SkillPenalties = SkillPenalties()
     """The shared penalties (the game's own `rewards` are not used by skills)."""
-    randomization: SoccerRandomization = OP3_RANDOMIZATION
-    """The soccer game's domain randomisation: on by default for skills, with the ranges that cover the reference
-    models (OP3_RANDOMIZATION)."""
+    randomization: SoccerRandomization = SoccerRandomization(enabled=True)
+    """The soccer game's domain randomisation, on by default for skills (their tasks add the ranges that cover the
+    reference models: legged.tasks)."""
 
 
 @dataclasses.dataclass(frozen=True)

@@ -38,6 +38,9 @@ class SceneOptions:
     """Sliding friction of every contact pair."""
     ceiling_alpha: float = 0.35
     """Opacity of the ceiling in renderers (so the robot inside a tunnel stays visible)."""
+    foot_condim: int | None = None
+    """Contact dimension of the feet's pairs with the floor (None: the one MuJoCo gives the robot's foot geom; 6 adds
+    torsional and rolling friction, whose coefficients the randomisation can scale: RandomizationConfig.contact_spin)."""
 
 
 def _hfield_grid(heights: np.ndarray) -> tuple[np.ndarray, float, float]:
@@ -141,7 +144,10 @@ def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneO
         pairs += [(g, s) for g in robot.thigh_geoms for s in surfaces[1:]]
     alone = mujoco.MjModel.from_xml_path(str(robot.mjcf_path))
     for geom, surface in pairs:
-        ET.SubElement(contact, "pair", geom1=geom, geom2=surface, **pair_attributes(alone, geom, options.friction))
+        attributes = pair_attributes(alone, geom, options.friction)
+        if options.foot_condim is not None and geom in robot.feet_geoms and surface == FLOOR_GEOM:
+            attributes["condim"] = str(options.foot_condim)
+        ET.SubElement(contact, "pair", geom1=geom, geom2=surface, **attributes)
     if contact_sensors:
         sensor = root.find("sensor") if root.find("sensor") is not None else ET.SubElement(root, "sensor")
         for geom in contact_sensors:
