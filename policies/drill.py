@@ -64,18 +64,6 @@ def check_player(spec: str, drill: DrillConfig) -> None:
                          f"policies are not trained for it")
 
 
-def check_robot(robot: str, physics: str) -> None:
-    """RobotModelError naming the cause when the drills cannot run on OP3 model `robot` with `physics` (checked
-    before any policy loads or scene compiles)."""
-    from legged.robots import OP3
-    from legged.robots.models import mjx_check, robot_model
-    from legged.robots.op3 import OP3_CTRL_DT
-
-    model = robot_model(OP3, robot, OP3_CTRL_DT)
-    if physics == "mjx":
-        mjx_check(model)
-
-
 def drill_player(spec: str, env: DrillEnv, checkpoint: str | None = None):
     """The player `--player` names (checked by `check_player`): `placo`, or a run whose policy (its newest
     checkpoint, or `checkpoint`) plays agent 0."""
@@ -136,10 +124,14 @@ def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "
     """Run `episodes` episodes of drill `name` with `player` (a run: its newest checkpoint, or `checkpoint`),
     each `seconds` long (default: DrillConfig's), on the OP3 model `robot`; returns its figures (see
     legged.soccer.drills)."""
+    from legged.robots import OP3
+    from legged.robots.models import checked_model
+    from legged.robots.op3 import OP3_CTRL_DT
+
     lengths = {} if seconds is None else {"getup_seconds" if name == "getup" else "episode_seconds": seconds}
     drill = DrillConfig(name=name, **lengths)
     check_player(player, drill)
-    check_robot(robot, physics)
+    checked_model(OP3, robot, OP3_CTRL_DT, physics)  # a bad model: one line, before any policy loads
     env = drill_env(player, drill, randomize, robot)
     policy = drill_player(player, env, checkpoint)
     finals = evaluate(env, policy, episodes, seed, physics, num_envs, threads, progress=progress)

@@ -49,16 +49,14 @@ def on_robot(config, robot: str, physics: str | None = None):
     MJCF path; legged.robots.models), the model checked now (and that MJX runs it, for `physics` mjx); ValueError
     naming the cause. On a model other than the project's, the randomisation keeps that model's own joint and foot
     parameters (MODEL_RANGES off); the rest of it (masses, gains, latency, pushes, ...) stays as the run has it."""
-    from legged.robots.models import mjx_check, robot_model
+    from legged.robots.models import checked_model
 
     if robot in ("", "project"):
         return config
     if not task_entry(config.task).robot_models:
         raise ValueError(f"--robot {robot}: {config.task} runs on the project's {task_entry(config.task).robot.name} "
                          f"model only")
-    spec = robot_model(task_entry(config.task).robot, robot, config.env.ctrl_dt)
-    if physics == "mjx":
-        mjx_check(spec)
+    checked_model(task_entry(config.task).robot, robot, config.env.ctrl_dt, physics)
     # the model's own joints and feet, not draws that would replace them (a run trained with those ranges)
     drawn = {f.name for f in dataclasses.fields(config.env.randomization)}
     own = dataclasses.replace(config.env.randomization, **{k: None for k in MODEL_RANGES if k in drawn})

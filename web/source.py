@@ -224,7 +224,10 @@ def _load_policy(run_dir: Path, checkpoint: str | None, log: Callable[[str], Non
 def _resolve_drill(request: ViewRequest, log: Callable[[str], None]) -> Resolved:
     """`legged view [RUN] --drill NAME`: the drill as `legged drill NAME --player RUN|placo` plays it."""
     from legged.soccer.drills import DRILLS, DrillConfig
-    from policies.drill import check_player, check_robot, drill_env
+    from legged.robots import OP3
+    from legged.robots.models import checked_model
+    from legged.robots.op3 import OP3_CTRL_DT
+    from policies.drill import check_player, drill_env
     from policies.run_dir import RunDir
 
     if request.drill not in DRILLS:
@@ -235,7 +238,7 @@ def _resolve_drill(request: ViewRequest, log: Callable[[str], None]) -> Resolved
     run_dir = _run_dir_of(request)
     drill, player = DrillConfig(name=request.drill), "placo" if run_dir is None else str(run_dir)
     check_player(player, drill)  # the run can do this drill (and is a run), before anything is built
-    check_robot(request.robot, request.physics)  # a bad model: one line, before a policy loads
+    checked_model(OP3, request.robot, OP3_CTRL_DT, request.physics)  # a bad model: one line, before a policy loads
     policy = None if run_dir is None else _load_policy(run_dir, request.checkpoint, log)
     log(f"[view] building the {request.drill} drill ...")
     env = drill_env(player, drill, randomize=False, robot=request.robot)

@@ -24,7 +24,7 @@ from legged.envs.config import EnvConfig
 from legged.envs.contacts import MjxContactReader
 from legged.envs.physics import PhysicsView, Spawn
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
-from legged.envs.motor import motor_limits, within_motor_curve
+from legged.envs.motor import motor_limits, servo_gains, within_motor_curve
 from legged.envs.rewards import penalty_terms
 from legged.envs.randomize import MODEL_DR, draw, randomized_fields
 from legged.robots.models import mjx_model_of, robot_model
@@ -272,8 +272,8 @@ class LeggedEnv(MjxEnv, abc.ABC):
         episode's gains), stays on the motors' side of their torque-speed lines (EnvConfig.motor_curve)."""
         data, dr = state.pipeline_state, state.info["dr"]
         q, qd = data.qpos[self._qadr], data.qvel[self._vadr]
-        kp = self._base_fields["actuator_gainprm"][:, 0] * dr["kp"] * dr["strength"]
-        kd = -self._base_fields["actuator_biasprm"][:, 2] * dr["kd"] * dr["strength"]
+        kp, kd = servo_gains(self._base_fields["actuator_gainprm"], self._base_fields["actuator_biasprm"], dr["kp"],
+                             dr["kd"], dr["strength"])
         return within_motor_curve(targets, q, qd, kp, kd, self._force_limit, self._motor_speeds)
 
     # ----------------------------------------------------------------- shared transition

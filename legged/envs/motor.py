@@ -32,6 +32,12 @@ def within_motor_curve(targets, q, qd, kp, kd, force_limit, free_speed):
     return jnp.clip(targets, q + (lower + kd * qd) / kp, q + (upper + kd * qd) / kp)
 
 
+def servo_gains(gainprm, biasprm, kp_scale, kd_scale, strength) -> tuple:
+    """(Kp, Kd) of PD position servos (MuJoCo's affine `general` actuators' nominal `gainprm`, `biasprm` rows) with an
+    episode's scales and motor strength applied, as legged.envs.randomize.servo_fields applies them to the model."""
+    return gainprm[..., 0] * kp_scale * strength, -biasprm[..., 2] * kd_scale * strength
+
+
 def motor_limits(model: mujoco.MjModel, robot: RobotSpec, actuators, needed: bool) -> tuple:
     """(force limit at rest of `actuators` (ids, any shape), free speed of each of the robot's joints) as float32
     arrays (inf where none); ValueError when `needed` (EnvConfig.motor_curve) and the spec has no motor speeds."""

@@ -141,9 +141,13 @@ def mjx_model_of(model: mujoco.MjModel, robot: RobotSpec):
     return out
 
 
-def mjx_check(robot: RobotSpec) -> None:
-    """RobotModelError naming the feature when MJX cannot run the robot's model (checked on the robot alone)."""
-    mjx_model_of(mujoco.MjModel.from_xml_path(str(robot.mjcf_path)), robot)
+def checked_model(robot: RobotSpec, choice: str, ctrl_dt: float, physics: str | None = None) -> RobotSpec:
+    """`robot_model(robot, choice, ctrl_dt)`, and for `physics` mjx a RobotModelError naming the feature when MJX
+    cannot run it (checked on the robot alone): what `--robot` checks before a policy loads or a scene compiles."""
+    spec = robot_model(robot, choice, ctrl_dt)
+    if physics == "mjx" and spec is not robot:
+        mjx_model_of(mujoco.MjModel.from_xml_path(str(spec.mjcf_path)), spec)
+    return spec
 
 
 def step_for(file_step: float, ctrl_dt: float) -> float:

@@ -28,7 +28,7 @@ from brax.envs.base import State
 from mujoco import mjx
 
 from legged.envs.api import MjxEnv
-from legged.envs.motor import motor_limits, within_motor_curve
+from legged.envs.motor import motor_limits, servo_gains, within_motor_curve
 from legged.envs.randomize import MODEL_DR
 from legged.envs.physics import PhysicsView, Spawn
 from legged.robots.models import mjx_model_of, robot_model
@@ -134,9 +134,9 @@ class SoccerEnv(MjxEnv):
         whose first physics steps keep each robot's previous targets (as many as its latency)."""
         dr, data, ids = state.info["dr"], state.pipeline_state, self.layout.actuator_ids
         if self.config.motor_curve:
-            gains = lambda key: dr[key][:, None] if key in dr else 1.0
-            kp = self._base_fields["actuator_gainprm"][ids, 0] * gains("kp") * dr["strength"][ids]
-            kd = -self._base_fields["actuator_biasprm"][ids, 2] * gains("kd") * dr["strength"][ids]
+            scale = lambda key: dr[key][:, None] if key in dr else 1.0     # each robot's, on its joints
+            kp, kd = servo_gains(self._base_fields["actuator_gainprm"][ids], self._base_fields["actuator_biasprm"][ids],
+                                 scale("kp"), scale("kd"), dr["strength"][ids])
             q, qd = data.qpos[self.layout.joint_qpos_adr], data.qvel[self.layout.joint_dof_adr]
             ctrl = ctrl.at[ids].set(within_motor_curve(ctrl[ids], q, qd, kp, kd, self._force_limit,
                                                        self._motor_speeds))
