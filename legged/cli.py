@@ -56,6 +56,8 @@ def cmd_eval(args) -> int:
         raise ValueError(f"--difficulty and --world-seed apply to confined tasks; {config.task} has no worlds")
     if args.ood:
         ood_config(config.env)  # fails now for tasks without dynamics randomisation
+        if args.nominal:
+            raise ValueError("--ood draws dynamics out of the training distribution; --nominal draws none: choose one")
     soccer = task_entry(config.task).kind == "soccer"
     if (args.opponent or args.teammate) and not soccer:
         raise ValueError(f"--opponent (or --teammate) applies to soccer tasks; {config.task} has no opponents")
@@ -75,6 +77,9 @@ def cmd_eval(args) -> int:
         raise ValueError(f"{args.run_dir} trained on the {config.drill} drill, where nobody else plays: its eval "
                          f"plays the drill, without --opponent or --teammate (or use `legged drill {config.drill} "
                          f"--player {args.run_dir}`)")
+    if (args.compare_teacher or args.compare_pilot) and (args.compare_robots or args.robot != "project"):
+        raise ValueError("--compare-teacher and --compare-pilot play on the project's robot model; run them without "
+                         "--robot and --compare-robots")
     if args.compare_robots and (args.robot != "project" or len(set(args.compare_robots)) < len(args.compare_robots)):
         raise ValueError("--compare-robots names each model once, and replaces --robot")
     robots = args.compare_robots or [args.robot]
@@ -89,6 +94,8 @@ def cmd_eval(args) -> int:
                   task=config.task)
     if args.ood:
         report["ood"] = True
+    if args.nominal:
+        report["nominal"] = True
     if args.compare_robots:
         report["robots"] = {r: _evaluate_run(args, c, policy) for r, c in configs.items()}
         report["ratios"] = robot_ratios(report["robots"], robots[0])
@@ -104,7 +111,7 @@ def _evaluate_run(args, config, policy) -> dict:
 
     from legged.tasks import task_entry
     from policies.evaluate import (HELD_OUT_SEED_OFFSET, confined_eval_config, evaluate, held_out, latent_probe,
-                                   ood_config, summarize)
+                                   nominal_config, ood_config, summarize)
     from policies.run_dir import check_policy
     from policies.training import build_env
 
@@ -118,7 +125,11 @@ def _evaluate_run(args, config, policy) -> dict:
         if args.tracker:
             env_config = dataclasses.replace(env_config, vision_tracker=True)
             report["tracker"] = True
-        env = build_env(dataclasses.replace(config, env=ood_config(env_config) if args.ood else env_config))
+        if args.ood:
+            env_config = ood_config(env_config)
+        elif args.nominal:
+            env_config = nominal_config(env_config)
+        env = build_env(dataclasses.replace(config, env=env_config))
         check_policy(policy, env)
         if config.pilot:
             report["pilot"] = config.pilot
@@ -145,6 +156,7 @@ def _evaluate_run(args, config, policy) -> dict:
         report["difficulties"] = {}
         for level in args.difficulty if args.difficulty is not None else config.env.difficulties:
             env_config = confined_eval_config(config.env, level, args.episodes, args.world_seed)
+            env_config = nominal_config(env_config) if args.nominal else env_config
             env = build_env(dataclasses.replace(config, env=env_config), progress=not args.quiet)
             check_policy(policy, env)
             finals = evaluate(env, policy, args.episodes, args.seed, args.physics,
@@ -226,15 +238,20 @@ def cmd_camera(args) -> int:
     if task_entry(args.task).kind != "soccer":  # unknown names fail here too
         soccer = sorted(n for n, e in TASKS.items() if e.kind == "soccer")
         raise ValueError(f"{args.task!r} is not a soccer task; soccer tasks: {', '.join(soccer)}")
-    env = make(args.task)
-    report = write_camera_images(env.mj_model, game_start(env, args.seed), args.out, env.config.camera)
-    report = dict(report, task=args.task, seed=args.seed)
+    if args.robot != "project":
+        from legged.robots.models import checked_model
+
+        checked_model(task_entry(args.task).robot, args.robot, task_entry(args.task).config.ctrl_dt)
+    env = make(args.task, robot_model=args.robot)
+    report = write_camera_images(env.mj_model, game_start(env, args.seed), args.out, env.config.camera, env.layout)
+    report = dict(report, task=args.task, seed=args.seed, robot=args.robot)
     if args.json:
         print(json.dumps(report))
     else:
-        print(f"[camera] {args.task} seed {args.seed}: segmentation agreement with MuJoCo's renderer "
-              f"{report['segmentation']:.4f}, median depth error {report['depth_median_abs_error']:.2e} m; "
-              f"wrote {len(report['files']['ray'])} agent(s) x 2 images to {args.out}")
+        print(f"[camera] {args.task} seed {args.seed} robot {args.robot}: segmentation agreement of the "
+              f"{report['caster'].upper()} ray caster with MuJoCo's renderer {report['segmentation']:.4f}, median "
+              f"depth error {report['depth_median_abs_error']:.2e} m; wrote {len(report['files']['ray'])} agent(s) "
+              f"x 2 images to {args.out}")
     return 0
 
 
@@ -356,6 +373,8 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--ood", action="store_true",
                     help="out of the training distribution: friction 0.1-0.25, +4 kg payload, motor strength "
                          "0.7-0.8, pushes 1.5x stronger (Go1 tasks)")
+    ev.add_argument("--nominal", action="store_true",
+                    help="each robot model as it is: the run's domain randomisation and observation noise off")
     ev.add_argument("--oracle", type=lambda v: [p for p in v.split(",") if p], default=[], metavar="ball,own_goal,...",
                     help="diagnostics: a vision player that estimates the game steers by the truth for these parts")
     ev.add_argument("--pilot", default=None, metavar="teacher|RUN|none",
@@ -407,6 +426,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--task", default="soccer-1v1-vision", help="soccer-1v1, soccer-2v2 or soccer-1v1-vision")
     c.add_argument("--seed", type=SEED, default=0, help="game state: 0 is the kick-off, others move robots and ball")
     c.add_argument("--out", default="camera", help="folder for agent<i>_ray.png and agent<i>_native.png")
+    c.add_argument("--robot", default="project", metavar="MODEL",
+                   help="the OP3 model: project, menagerie or PATH.xml (its meshes cast by MuJoCo's C ray caster)")
     c.add_argument("--json", action="store_true", help="print the agreement figures as JSON")
     c.set_defaults(fn=cmd_camera)
 

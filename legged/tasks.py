@@ -106,7 +106,7 @@ TASKS: dict[str, TaskEntry] = {e.name: e for e in (
     TaskEntry("soccer-2v2", _soccer, SoccerConfig(scene=SoccerSceneConfig(players_per_team=2), **_OP3), OP3, "soccer",
               **_DEPLOYED),
     TaskEntry("soccer-1v1-vision", _soccer, SoccerConfig(vision=True, **_OP3), OP3, "soccer", backends=("rsl",),
-              vision=True, bounded_actions=True),
+              vision=True, **_DEPLOYED),
 )}
 """Every task, by name."""
 

@@ -39,6 +39,13 @@ def ood_config(env_config):
         push_velocity=1.5 * r.push_velocity))
 
 
+def nominal_config(env_config):
+    """The env config with domain randomisation and observation noise off: each robot model as it is (its own
+    masses, gains, joints and contacts; no pushes, latency or sensor errors)."""
+    return dataclasses.replace(env_config, randomization=dataclasses.replace(env_config.randomization, enabled=False),
+                               noise=dataclasses.replace(env_config.noise, enabled=False))
+
+
 MODEL_RANGES = ("joint_damping", "joint_armature", "joint_frictionloss", "contact_softness", "contact_timeconst",
                 "contact_margin", "contact_spin")
 """Randomisation ranges that replace a model's own values: off when a policy runs on another model (`on_robot`)."""

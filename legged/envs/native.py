@@ -83,7 +83,7 @@ class NativePhysics:
         if self._caster is not None:
             if rows is None or self._last is None:
                 rows = np.arange(n)
-            images = self._caster.render(*(self._derived[k][rows] for k in CAMERA_FIELDS))
+            images = self._caster.render(*(self._derived[k][rows] for k in CAMERA_FIELDS + ("xpos", "xmat")))
             if len(rows) == n:
                 out["camera_rgb"], out["camera_depth"] = images["rgb"], images["depth"]
             else:

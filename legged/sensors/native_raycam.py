@@ -12,6 +12,11 @@ spheres lie wholly outside the pyramid of its pixel rays are made invisible to t
 thread's own copy of the model; MuJoCo's caster skips invisible geoms). No pixel changes; on random soccer
 states a camera casts against about a tenth of the geoms.
 
+MuJoCo's caster also culls by the bounding volumes of bodies whose geoms have them (meshes: Menagerie's OP3),
+placed by the bodies' inertial frames, so `render` takes the body poses too and derives those frames. It casts
+meshes, which the JAX caster does not: `render_anywhere` renders a camera that sees meshes with this caster from
+jitted code too (a host callback), so a task's observation is the same in every engine.
+
 One difference from the JAX caster: the JAX camera skips surfaces nearer than the near plane (as OpenGL
 clips them), which is how a head camera sees out of the head it sits in; `mj_multiRay` has no near plane,
 so here the rays ignore the geoms of the camera's own body instead. Agreement with the JAX renderer is
@@ -21,12 +26,22 @@ tested (tests/test_native_raycam.py).
 from __future__ import annotations
 
 import copy
+import functools
+import threading
 from concurrent.futures import ThreadPoolExecutor
 
+import jax
+import jax.numpy as jnp
 import mujoco
 import numpy as np
 
-from legged.sensors.raycam import RayCamera, camera_rays, images_from_hits
+from legged.sensors.raycam import RayCamera, camera_rays, images_from_hits, render
+
+
+def _rotation(quat: np.ndarray) -> np.ndarray:
+    out = np.zeros(9)
+    mujoco.mju_quat2Mat(out, quat)
+    return out.reshape(3, 3)
 
 
 def frustum_planes(camera: RayCamera) -> np.ndarray:
@@ -70,6 +85,8 @@ class NativeRayCaster:
         self._rbound = model.geom_rbound[self._cast_ids] + 1e-6
         self._unbounded = model.geom_type[self._cast_ids] == mujoco.mjtGeom.mjGEOM_PLANE
         self._models = [self._culling_copy(model) for _ in range(threads)] if self.cull else [model] * threads
+        self._ipos = model.body_ipos.copy()
+        self._irot = np.stack([_rotation(q) for q in model.body_iquat])  # inertial frame in the body frame
         self._pool = ThreadPoolExecutor(threads) if threads > 1 else None
 
     def _culling_copy(self, model: mujoco.MjModel) -> mujoco.MjModel:
@@ -90,13 +107,16 @@ class NativeRayCaster:
         inside = np.einsum("ncgi,ncki->ncgk", offset, normals) >= -self._rbound[:, None]
         return inside.all(axis=-1) | self._unbounded
 
-    def render(self, geom_xpos: np.ndarray, geom_xmat: np.ndarray, cam_xpos: np.ndarray, cam_xmat: np.ndarray
-               ) -> dict:
+    def render(self, geom_xpos: np.ndarray, geom_xmat: np.ndarray, cam_xpos: np.ndarray, cam_xmat: np.ndarray,
+               xpos: np.ndarray, xmat: np.ndarray) -> dict:
         """Images of every camera of the batch: rgb uint8 [N, n_cam, H, W, 3], depth float32, segmentation
-        and geom int32 [N, n_cam, H, W] (as raycam.render, batched), from poses [N, ngeom | ncam, 3 | 9 | 3, 3].
-        Each thread casts and colours its share of the environments."""
+        and geom int32 [N, n_cam, H, W] (as raycam.render, batched), from geom, camera and body poses
+        [N, ngeom | ncam | nbody, 3 | 9 | 3, 3]. Each thread casts and colours its share of the environments."""
         n = geom_xpos.shape[0]
-        xmat = np.asarray(geom_xmat).reshape(n, -1, 9)
+        geom_rot = np.asarray(geom_xmat).reshape(n, -1, 9)
+        body_rot = np.asarray(xmat, np.float64).reshape(n, -1, 3, 3)
+        xipos = np.asarray(xpos, np.float64) + np.einsum("nbij,bj->nbi", body_rot, self._ipos)
+        ximat = np.einsum("nbij,bjk->nbik", body_rot, self._irot).reshape(n, -1, 9)
         chunks = [c for c in np.array_split(np.arange(n), min(self.threads, n)) if len(c)]
 
         def work(k: int) -> dict:
@@ -112,7 +132,8 @@ class NativeRayCaster:
                                         rotations[:, self.camera.camera_ids]).astype(np.float32)
             for j, i in enumerate(rows):
                 data.geom_xpos[:] = geom_xpos[i]
-                data.geom_xmat[:] = xmat[i]
+                data.geom_xmat[:] = geom_rot[i]
+                data.xipos[:], data.ximat[:] = xipos[i], ximat[i]  # MuJoCo culls by the bodies' bounding volumes
                 for c in range(self.camera.n_cameras):
                     if self.cull:
                         model.geom_rgba[self._cast_ids, 3] = in_view[j, c]
@@ -133,3 +154,33 @@ class NativeRayCaster:
         """Stop the thread pool."""
         if self._pool is not None:
             self._pool.shutdown()
+
+
+_POSE_FIELDS = ("geom_xpos", "geom_xmat", "cam_xpos", "cam_xmat", "xpos", "xmat")
+
+
+@functools.cache
+def _host_caster(camera: RayCamera) -> tuple[NativeRayCaster, threading.Lock]:
+    return NativeRayCaster(camera.model, camera), threading.Lock()  # one scratch MjData: one call at a time
+
+
+def render_anywhere(camera: RayCamera, data) -> dict:
+    """`legged.sensors.raycam.render` for jitted and vmapped code whatever the camera sees: the JAX caster, or
+    for a camera that sees meshes (which it cannot cast) this module's C caster through a host callback, batched
+    under vmap. `data`: an mjx.Data, a PhysicsView or raycam.Poses (with the body poses)."""
+    if camera.model is None:
+        return render(camera, data)
+    cfg = camera.config
+    shape = (camera.n_cameras, cfg.height, cfg.width)
+    out = {"rgb": jax.ShapeDtypeStruct(shape + (3,), jnp.uint8), "depth": jax.ShapeDtypeStruct(shape, jnp.float32),
+           "segmentation": jax.ShapeDtypeStruct(shape, jnp.int32), "geom": jax.ShapeDtypeStruct(shape, jnp.int32)}
+
+    def host(*poses):
+        lead = poses[0].shape[:-2]  # batch axes before [ngeom, 3]
+        flat = [np.asarray(p).reshape((-1,) + p.shape[len(lead):]) for p in poses]
+        caster, lock = _host_caster(camera)
+        with lock:
+            images = caster.render(*flat)
+        return {k: images[k].reshape(lead + images[k].shape[1:]) for k in out}
+
+    return jax.pure_callback(host, out, *(getattr(data, k) for k in _POSE_FIELDS), vmap_method="broadcast_all")

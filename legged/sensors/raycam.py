@@ -113,6 +113,8 @@ class RayCamera:
     """Unit ray direction of each pixel in each camera's frame, [n_cam, H * W, 3] (row-major from the top left)."""
     znear: float
     """Near clipping distance, metres (the model's, as MuJoCo's renderer uses)."""
+    model: mujoco.MjModel | None = None
+    """The model, kept when the camera sees meshes: MuJoCo's C caster casts them (legged.sensors.native_raycam)."""
 
     @classmethod
     def build(cls, model: mujoco.MjModel, camera_ids, config: RayCameraConfig = RayCameraConfig(),
@@ -154,6 +156,7 @@ class RayCamera:
             decal_class=int(decal_class),
             dirs=np.stack([pixel_directions(model.cam_fovy[c], config.width, config.height) for c in camera_ids]),
             znear=float(model.vis.map.znear * model.stat.extent),
+            model=model if geoms.meshes else None,
         )
 
     @property
@@ -260,6 +263,10 @@ class Poses(NamedTuple):
     """World positions of all cameras, [ncam, 3]."""
     cam_xmat: np.ndarray
     """World orientations of all cameras, [ncam, 9] or [ncam, 3, 3]."""
+    xpos: np.ndarray
+    """World positions of all bodies, [nbody, 3] (MuJoCo's C caster culls by the bodies' bounding volumes)."""
+    xmat: np.ndarray
+    """World orientations of all bodies, [nbody, 9] or [nbody, 3, 3]."""
 
 
 def poses_of(data) -> Poses:

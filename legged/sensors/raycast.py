@@ -28,6 +28,9 @@ import numpy as np
 _T = mujoco.mjtGeom
 SUPPORTED_TYPES = (_T.mjGEOM_PLANE, _T.mjGEOM_SPHERE, _T.mjGEOM_CAPSULE, _T.mjGEOM_ELLIPSOID,
                    _T.mjGEOM_CYLINDER, _T.mjGEOM_BOX)
+"""Geom types this (JAX) caster intersects."""
+SET_TYPES = SUPPORTED_TYPES + (_T.mjGEOM_MESH,)
+"""Geom types a GeomSet may hold: meshes too, which only MuJoCo's C caster (legged.sensors.native_raycam) casts."""
 _TINY = 1e-20
 
 
@@ -41,20 +44,29 @@ class GeomSet:
     """mjtGeom type of each geom, [n]."""
     size: np.ndarray
     """MuJoCo geom size of each geom, [n, 3]."""
+    names: tuple[str, ...] = ()
+    """Each geom's name (its id where it has none), for messages."""
 
     @classmethod
     def from_model(cls, model: mujoco.MjModel, geom_ids) -> GeomSet:
-        """Geom set of the listed geom ids (ValueError for meshes, height fields and other types)."""
+        """Geom set of the listed geom ids (ValueError for height fields and other types; meshes are kept, for
+        MuJoCo's C caster: `cast` refuses them)."""
         ids = np.asarray(geom_ids, dtype=np.int32)
         for g in ids:
-            if int(model.geom_type[g]) not in [int(t) for t in SUPPORTED_TYPES]:
+            if int(model.geom_type[g]) not in [int(t) for t in SET_TYPES]:
                 raise ValueError(f"geom {model.geom(g).name or g!r} has type "
-                                 f"{mujoco.mjtGeom(model.geom_type[g]).name}; the ray caster handles "
-                                 f"{', '.join(t.name for t in SUPPORTED_TYPES)}")
+                                 f"{mujoco.mjtGeom(model.geom_type[g]).name}; the ray camera handles "
+                                 f"{', '.join(t.name for t in SET_TYPES)}")
         order = np.argsort(model.geom_type[ids], kind="stable")  # one block per type
         ids = ids[order]
         return cls(ids=ids, types=model.geom_type[ids].astype(np.int32),
-                   size=model.geom_size[ids].astype(np.float32))
+                   size=model.geom_size[ids].astype(np.float32),
+                   names=tuple(model.geom(int(g)).name or str(int(g)) for g in ids))
+
+    @property
+    def meshes(self) -> tuple[str, ...]:
+        """Names (or ids) of the mesh geoms, which the JAX caster cannot cast."""
+        return tuple(n for n, t in zip(self.names, self.types) if t == int(_T.mjGEOM_MESH))
 
 
 def _first(cands: jax.Array, tmin: jax.Array) -> jax.Array:
@@ -180,6 +192,10 @@ def cast(geoms: GeomSet, geom_xpos, geom_xmat, origins, dirs, tmin):
     Returns:
       dist [C, P] (inf: no hit), index [C, P] into geoms.ids (-1: no hit), world normal [C, P, 3].
     """
+    if geoms.meshes:
+        raise ValueError(f"the JAX ray camera casts against primitive geoms only, and {len(geoms.meshes)} visible "
+                         f"geoms are meshes (e.g. {geoms.meshes[0]}): use native physics, whose camera is MuJoCo's "
+                         f"own ray caster")
     xpos = jnp.asarray(geom_xpos)
     xmat = jnp.asarray(geom_xmat).reshape((-1, 3, 3))
     dists = []

@@ -34,7 +34,7 @@ from legged.envs.physics import PhysicsView, Spawn
 from legged.robots.models import mjx_model_of, robot_model
 from legged.robots.op3 import OP3
 from legged.robots.spec import RobotSpec
-from legged.sensors.raycam import render
+from legged.sensors.native_raycam import render_anywhere
 from legged.soccer import observe, randomize, rules
 from legged.soccer.sightings import (BALL_MIN_SHADE, NET_MIN_SHADE, SIGHTED, SIGHTING_SIZE, camera_agents, pixel_points,
                                      sighting)
@@ -290,7 +290,7 @@ class SoccerEnv(MjxEnv):
         if c.vision:  # what the state players read, for their students' teachers (legged distill)
             obs["features"] = clean
         if self.camera is not None:
-            images = render(self.camera, data) if data.camera_rgb is None else \
+            images = render_anywhere(self.camera, data) if data.camera_rgb is None else \
                 {"rgb": data.camera_rgb, "depth": data.camera_depth}
             obs["camera"] = observe.camera_observation(images, c.camera.max_depth)
             if c.vision_sightings or c.vision_tracker:  # kept in info too, for the learner's tracker and viewers

@@ -18,7 +18,7 @@ from brax.envs.base import State
 from legged.envs.api import MjxEnv, layout_slices
 from legged.envs.math import yaw_rotate
 from legged.envs.physics import PhysicsView, Spawn
-from legged.sensors.raycam import render
+from legged.sensors.native_raycam import render_anywhere
 from legged.soccer.env import SoccerEnv
 from legged.soccer.observe import PROPRIO_SIZE, feature_layout, read_bodies
 from legged.soccer.opponents import (Opponent, OpponentNet, ball_pan, network_actions, opponent_step,
@@ -132,7 +132,7 @@ class LearnerView(MjxEnv):
         size), for viewers; jittable. Available in every soccer task, with or without vision."""
         if self._camera is None:
             self._camera = soccer_camera(self.mj_model, self.config.camera, self.game.layout)
-        return render(self._camera, data)["rgb"][LEARNER]
+        return render_anywhere(self._camera, data)["rgb"][LEARNER]
 
     # ----------------------------------------------------------------- engine verbs (reset, step: MjxEnv)
     def spawn(self, rng: jax.Array, carry: dict | None = None) -> Spawn:

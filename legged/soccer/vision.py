@@ -22,6 +22,7 @@ from legged.sensors.raycam import (
     poses_of,
     render,
 )
+from legged.sensors.native_raycam import render_anywhere
 from legged.soccer.layout import SoccerLayout
 
 
@@ -88,15 +89,17 @@ def agreement(ray: dict, native_classes: np.ndarray, native_depth: np.ndarray) -
             "per_camera": per}
 
 
-def native_images(model: mujoco.MjModel, data: mujoco.MjData, camera: RayCamera) -> dict:
-    """MuJoCo's renderer through the same cameras at the same size: rgb, depth, geom, segmentation."""
+def native_images(model: mujoco.MjModel, data: mujoco.MjData, camera: RayCamera,
+                  layout: SoccerLayout | None = None) -> dict:
+    """MuJoCo's renderer through the same cameras at the same size: rgb, depth, geom, segmentation (classes from
+    `layout`, default: the project's scene layout read from `model`)."""
     from legged.sensors.native_camera import NativeCamera
 
     cfg = camera.config
     with NativeCamera(model, cfg.width, cfg.height) as native:
         shots = [native.render(data, int(c)) for c in camera.camera_ids]
     out = {k: np.stack([s[k] for s in shots]) for k in ("rgb", "depth", "geom")}
-    out["segmentation"] = classes_of_geoms(model, out["geom"])
+    out["segmentation"] = classes_of_geoms(model, out["geom"], layout)
     return out
 
 
@@ -106,10 +109,18 @@ def _write_png(path: Path, rgb: np.ndarray) -> None:
     Image.fromarray(np.asarray(rgb, dtype=np.uint8)).save(path)
 
 
+def ray_images(model: mujoco.MjModel, data: mujoco.MjData, camera: RayCamera) -> tuple[dict, str]:
+    """The ray camera's images of `data` and the caster that made them: the JAX caster ("jax"), or MuJoCo's C
+    caster ("c") where the camera sees meshes, which only the C caster casts."""
+    images = jax.jit(lambda d: render_anywhere(camera, d))(poses_of(data))
+    return {k: np.asarray(v) for k, v in images.items()}, "jax" if camera.model is None else "c"
+
+
 def write_camera_images(scene_model: mujoco.MjModel, data: mujoco.MjData, out_dir,
-                        config: RayCameraConfig = RayCameraConfig()) -> dict:
-    """Write DIR/agent<i>_ray.png (the JAX renderer) and DIR/agent<i>_native.png (MuJoCo's renderer, same
-    camera, same size) for every agent; return the agreement figures (see `agreement`) and the paths.
+                        config: RayCameraConfig = RayCameraConfig(), layout: SoccerLayout | None = None) -> dict:
+    """Write DIR/agent<i>_ray.png (the ray camera: `ray_images`) and DIR/agent<i>_native.png (MuJoCo's renderer,
+    same camera, same size) for every agent; return the agreement figures (see `agreement`), the caster and the
+    paths. `layout`: the scene's (default: read from `scene_model`, the project's robots).
 
     `data` must be forward-computed (mj_forward) so camera and geom poses are current.
     """
@@ -118,9 +129,9 @@ def write_camera_images(scene_model: mujoco.MjModel, data: mujoco.MjData, out_di
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OSError(f"cannot create output directory {out}: {exc.strerror}") from exc
-    camera = soccer_camera(scene_model, config)
-    ray = {k: np.asarray(v) for k, v in jax.jit(lambda d: render(camera, d))(poses_of(data)).items()}
-    native = native_images(scene_model, data, camera)
+    camera = soccer_camera(scene_model, config, layout)
+    ray, caster = ray_images(scene_model, data, camera)
+    native = native_images(scene_model, data, camera, layout)
     figures = agreement(ray, native["segmentation"], native["depth"])
     paths = {"ray": [], "native": []}
     for i in range(camera.n_cameras):
@@ -128,7 +139,7 @@ def write_camera_images(scene_model: mujoco.MjModel, data: mujoco.MjData, out_di
             path = out / f"agent{i}_{kind}.png"
             _write_png(path, rgb)
             paths[kind].append(str(path))
-    return {**figures, "width": config.width, "height": config.height, "files": paths}
+    return {**figures, "caster": caster, "width": config.width, "height": config.height, "files": paths}
 
 
 def time_render(model: mujoco.MjModel, data: mujoco.MjData, batch_sizes=(1, 8, 64), repeats: int = 5,
