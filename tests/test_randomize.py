@@ -99,9 +99,12 @@ def test_sensor_biases_reach_the_noisy_state():
     assert np.abs(info["dr"]["encoder_offset"]).max() > 0
 
 
-def test_another_robot_model_keeps_its_own_joints_and_feet():
+def test_another_robot_model_keeps_its_own_joints_and_feet(monkeypatch):
     """On a reference model a run's randomisation no longer replaces the model's joint and foot parameters (a soccer
-    run's neither); a vision run refuses --robot (its ray camera draws the project's OP3 only)."""
+    run's neither, a camera player's too); a task that runs the project's model only refuses --robot."""
+    import dataclasses
+
+    from legged import tasks
     from policies.config import TrainConfig
     from policies.evaluate import MODEL_RANGES, on_robot
 
@@ -112,6 +115,10 @@ def test_another_robot_model_keeps_its_own_joints_and_feet():
     soccer = on_robot(TrainConfig(task="soccer-1v1").resolved(), "menagerie")
     assert soccer.env.robot_model == "menagerie" and soccer.env.randomization.joint_damping is None
     assert soccer.env.randomization.latency_s is not None
+    vision = on_robot(TrainConfig(task="soccer-1v1-vision").resolved(), "menagerie")
+    assert vision.env.robot_model == "menagerie" and vision.env.randomization.joint_damping is None
+    entry = tasks.TASKS["soccer-1v1-vision"]
+    monkeypatch.setitem(tasks.TASKS, entry.name, dataclasses.replace(entry, robot_models=False))
     with pytest.raises(ValueError, match="project's op3 model only"):
         on_robot(TrainConfig(task="soccer-1v1-vision").resolved(), "menagerie")
 
