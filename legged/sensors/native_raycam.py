@@ -35,13 +35,8 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
+from legged.envs.math import quat_to_mat
 from legged.sensors.raycam import RayCamera, camera_rays, images_from_hits, render
-
-
-def _rotation(quat: np.ndarray) -> np.ndarray:
-    out = np.zeros(9)
-    mujoco.mju_quat2Mat(out, quat)
-    return out.reshape(3, 3)
 
 
 def frustum_planes(camera: RayCamera) -> np.ndarray:
@@ -86,7 +81,7 @@ class NativeRayCaster:
         self._unbounded = model.geom_type[self._cast_ids] == mujoco.mjtGeom.mjGEOM_PLANE
         self._models = [self._culling_copy(model) for _ in range(threads)] if self.cull else [model] * threads
         self._ipos = model.body_ipos.copy()
-        self._irot = np.stack([_rotation(q) for q in model.body_iquat])  # inertial frame in the body frame
+        self._irot = np.asarray(quat_to_mat(model.body_iquat), np.float64)  # inertial frame in the body frame
         self._pool = ThreadPoolExecutor(threads) if threads > 1 else None
 
     def _culling_copy(self, model: mujoco.MjModel) -> mujoco.MjModel:
