@@ -1,7 +1,7 @@
 """legged: reinforcement learning for legged robots in MuJoCo / MJX.
 
 Confined-space navigation for a quadruped (Unitree Go1), robot soccer for humanoids, teacher-student
-distillation. See the README for the command line.
+distillation. The command line: docs/cli.md.
 """
 
 import contextlib as _contextlib

@@ -40,23 +40,13 @@ def _planner_config(args):
 
 
 def _scene_maps(args):
-    """Height maps sampled from a user's MJCF scene (errors name the file and the cause)."""
-    from pathlib import Path
-
-    import mujoco
-
-    from planners import maps_from_scene, reference_between
+    """Height maps sampled from a user's MJCF scene around its start and goal (errors name the file and the cause)."""
+    from legged.worlds.scenes import read_model
+    from planners import navigation_maps
 
     if args.start is None or args.goal is None:
         raise ValueError("--scene needs --start X,Y,Z and --goal X,Y,Z (body centre, metres)")
-    path = Path(args.scene)
-    if not path.is_file():
-        raise FileNotFoundError(f"scene file not found: {path}")
-    try:
-        model = mujoco.MjModel.from_xml_path(str(path))
-    except ValueError as exc:
-        raise ValueError(f"cannot load scene {path}: {exc}") from None
-    return maps_from_scene(model, reference_between(args.start, args.goal), args.resolution)
+    return navigation_maps(read_model(args.scene), args.start, args.goal, args.resolution)
 
 
 def cmd_plan(args) -> int:
@@ -102,6 +92,31 @@ def cmd_bench_plan(args) -> int:
     records = bench_planner(args.difficulties, args.worlds, _planner_config(args), args.first_seed,
                             progress=not args.quiet)
     return _print_records(records, args.json, print_table)
+
+
+def cmd_bench_navigate(args) -> int:
+    from policies.nav_bench import bench_navigate, print_table
+
+    report = bench_navigate(args.scenes, shipped_policy(args.policy), args.seeds, args.first_seed, args.robot,
+                            args.physics, args.threads or None, args.resolution, _planner_config(args),
+                            progress=not args.quiet)
+    if args.json:
+        print(json.dumps(report))
+    else:
+        print_table(report)
+    return 0
+
+
+def cmd_scenes(args) -> int:
+    from legged.worlds.bench_scenes import build
+    from legged.worlds.scenes import write_scenes
+
+    paths = write_scenes(args.out, build())
+    if args.json:
+        print(json.dumps({"out": str(args.out), "scenes": [p.name for p in paths]}))
+    else:
+        print(f"[scenes] wrote {len(paths)} scenes to {args.out}: {', '.join(p.stem for p in paths)}")
+    return 0
 
 
 def _add_planner_options(parser) -> None:
@@ -267,10 +282,14 @@ def add_navigation_commands(sub) -> None:
     nv.add_argument("--json", action="store_true", help="one-line JSON")
     nv.set_defaults(fn=cmd_navigate)
 
+    sc = sub.add_parser("scenes", help="write the navigation benchmark's scenes (MJCF built from primitives)")
+    sc.add_argument("--out", required=True, help="output directory (one NAME.xml per scene)")
+    sc.add_argument("--json", action="store_true", help="print a JSON summary")
+    sc.set_defaults(fn=cmd_scenes)
 
 
 def add_bench_plan(bsub) -> None:
-    """The `bench plan` sub-command."""
+    """The `bench plan` and `bench navigate` sub-commands."""
     bp = bsub.add_parser("plan", help="planning time and path length per difficulty over generated worlds")
     bp.add_argument("--difficulties", type=ints(0, 20), default=[0, 1, 2], help="comma-separated levels")
     bp.add_argument("--worlds", type=bounded(int, 1, 10000), default=20, help="worlds per difficulty (seeds first-seed onward)")
@@ -282,3 +301,16 @@ def add_bench_plan(bsub) -> None:
     bp.add_argument("--quiet", action="store_true", help="no progress bars")
     bp.set_defaults(fn=cmd_bench_plan)
 
+    bn = bsub.add_parser("navigate", help="plan, follow and replan on every scene of a directory, a few seeds each")
+    bn.add_argument("--scenes", required=True, help="directory of scene files (start, goal, time limit inside; "
+                    "legged scenes --out DIR writes the benchmark's)")
+    bn.add_argument("--seeds", type=bounded(int, 1, 1000), default=5, help="episodes per scene")
+    bn.add_argument("--first-seed", type=SEED, default=0)
+    bn.add_argument("--policy", default=None, help=f"a waypoint-follower run (default: {SHIPPED_FOLLOWER})")
+    bn.add_argument("--resolution", type=bounded(float, 0.005, 1.0), default=0.025, help="map resolution, m")
+    add_physics_options(bn, "native")
+    add_robot_option(bn)
+    _add_planner_options(bn)
+    bn.add_argument("--json", action="store_true", help="print one JSON object")
+    bn.add_argument("--quiet", action="store_true", help="no progress bar")
+    bn.set_defaults(fn=cmd_bench_navigate)

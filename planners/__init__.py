@@ -5,10 +5,11 @@ from planners.body_check import BodyCheckConfig, BodyChecker
 from planners.body_planner import PLANNERS, Plan, PlannerConfig, PlanningError, plan_path, replan
 from legged.worlds.maps import HeightMaps
 from planners.planned_env import make_planned_env
-from planners.scene_maps import maps_from_scene, reference_between
+from planners.scene_maps import maps_from_scene, navigation_maps, reference_between
 
 __all__ = [
     "PLANNERS", "BodyCheckConfig", "BodyChecker", "HeightMaps", "Plan", "PlannerConfig", "PlanningError",
-    "cache_key", "default_cache_dir", "feasible_worlds", "make_planned_env", "maps_from_scene", "plan_path",
+    "cache_key", "default_cache_dir", "feasible_worlds", "make_planned_env", "maps_from_scene", "navigation_maps",
+    "plan_path",
     "plan_world", "plan_worlds", "reference_between", "replan",
 ]

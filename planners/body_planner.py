@@ -1,4 +1,4 @@
-"""Body-pose path planning with OMPL through a confined space (PAPERS.md section 1).
+"""Body-pose path planning with OMPL through a confined space.
 
 State space: the body pose as a 6-D real vector (x, y, h, roll, pitch, yaw), a reduction of SE(3):
 - h is the body centre's height above the floor beneath it (z = floor(x, y) + h). The legs keep the

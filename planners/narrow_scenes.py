@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 
 from legged.robots.spec import RobotSpec
+from legged.worlds.scenes import box
 from planners.body_check import BodyCheckConfig
 
 TUNNEL_HALF_WIDTH = 0.5
@@ -36,21 +37,15 @@ class NarrowScene:
     """Goal body centre x, y, z."""
 
 
-def _box(name: str, centre, half) -> str:
-    pos = " ".join(f"{v:.4f}" for v in centre)
-    size = " ".join(f"{v:.4f}" for v in half)
-    return f'    <geom name="{name}" type="box" pos="{pos}" size="{size}"/>'
-
-
 def tunnel_xml(extra: list[str]) -> str:
     """A closed 4 m box tunnel, 1 m wide and 0.6 m high inside, plus `extra` geoms."""
     w = TUNNEL_HALF_WIDTH
-    geoms = [_box("ground", (0, 0, -0.05), (2.5, w + 0.1, 0.05)),
-             _box("wall_left", (0, w + 0.05, 0.35), (2.5, 0.05, 0.35)),
-             _box("wall_right", (0, -w - 0.05, 0.35), (2.5, 0.05, 0.35)),
-             _box("end_back", (-2.05, 0, 0.35), (0.05, w, 0.35)),
-             _box("end_front", (2.05, 0, 0.35), (0.05, w, 0.35)),
-             _box("roof", (0, 0, 0.65), (2.5, w + 0.1, 0.05))] + extra
+    geoms = [box("ground", (0, 0, -0.05), (2.5, w + 0.1, 0.05)),
+             box("wall_left", (0, w + 0.05, 0.35), (2.5, 0.05, 0.35)),
+             box("wall_right", (0, -w - 0.05, 0.35), (2.5, 0.05, 0.35)),
+             box("end_back", (-2.05, 0, 0.35), (0.05, w, 0.35)),
+             box("end_front", (2.05, 0, 0.35), (0.05, w, 0.35)),
+             box("roof", (0, 0, 0.65), (2.5, w + 0.1, 0.05))] + extra
     return "<mujoco model=\"narrow\">\n  <worldbody>\n" + "\n".join(geoms) + "\n  </worldbody>\n</mujoco>\n"
 
 
@@ -59,14 +54,14 @@ def bar(robot: RobotSpec, band: float, x: float, body: BodyCheckConfig = BodyChe
     lowest crouch (the body's top plus margin must pass under it)."""
     top = robot.body_box_half_extents[2] + body.margin
     underside = robot.body_height_range[0] + top + band
-    return _box(f"bar_{x:+.1f}", (x, 0, underside + 0.1), (0.15, TUNNEL_HALF_WIDTH, 0.1))
+    return box(f"bar_{x:+.1f}", (x, 0, underside + 0.1), (0.15, TUNNEL_HALF_WIDTH, 0.1))
 
 
 def block(robot: RobotSpec, gap: float, x: float, side: float = 1.0) -> str:
     """A 0.3 m deep block from one side wall leaving a `gap`-wide opening at the other."""
     length = 2 * TUNNEL_HALF_WIDTH - gap
     y = side * (TUNNEL_HALF_WIDTH - length / 2)
-    return _box(f"block_{x:+.1f}", (x, y, 0.3), (0.15, length / 2, 0.3))
+    return box(f"block_{x:+.1f}", (x, y, 0.3), (0.15, length / 2, 0.3))
 
 
 def narrow_scenes(robot: RobotSpec) -> list[NarrowScene]:

@@ -1,6 +1,6 @@
 """Confined-space environments whose waypoints come from the planner (what training uses).
 
-The environments never import the planner (DESIGN.md): this module plans the worlds ahead of time,
+The environments never import the planner (tests/test_layers.py): this module plans the worlds ahead of time,
 tiles the traversable ones into a terrain and hands the paths over as arrays.
 """
 

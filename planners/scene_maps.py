@@ -162,3 +162,26 @@ def reference_between(start, goal) -> Callable[[np.ndarray], np.ndarray]:
         return start[2] + t * (goal[2] - start[2])
 
     return reference
+
+
+def navigation_maps(model: mujoco.MjModel, start, goal, resolution: float = 0.025, margin: float = 1.0) -> HeightMaps:
+    """The maps of a scene for a navigation from `start` to `goal` (body centres): sampled at the height between
+    them, over the bounded obstacle geoms' extent and the start and goal with `margin` metres around them, so that
+    an open scene (a floor plane and nothing else, or a few posts) has a map too."""
+    start, goal = np.asarray(start, float), np.asarray(goal, float)
+    lo, hi = np.minimum(start[:2], goal[:2]) - margin, np.maximum(start[:2], goal[:2]) + margin
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    geoms = obstacle_geoms(model)
+    if not geoms:
+        raise ValueError("the scene has no static geoms that collide (not even a floor); nothing to walk on")
+    hit = np.zeros(1, np.int32)
+    for name, point in (("start", start), ("goal", goal)):
+        if mujoco.mj_ray(model, data, point[:3], np.array([0.0, 0.0, -1.0]), None, 1, -1, hit) < 0:
+            raise ValueError(f"the {name} ({', '.join(f'{v:g}' for v in point[:3])}) is off the scene: nothing "
+                             "below it to stand on")
+    boxes = [_xy_box(model, data, g) for g in geoms if not _is_plane(model, g)]
+    if boxes:
+        lo = np.minimum(lo, np.min([b[0] for b in boxes], 0))
+        hi = np.maximum(hi, np.max([b[1] for b in boxes], 0))
+    return maps_from_scene(model, reference_between(start, goal), resolution, bounds=(lo, hi))

@@ -147,8 +147,8 @@ class WorldLabeller(MLPModel):
     [-1 - margin, 1 + margin] leaves of them (the clipped sum less that command; margin 0: what the walker's
     clip leaves; inf, the default: the raw corrections). The teacher's raw corrections are mostly beyond the
     walker's clip (mean square 3-10 against 0.6-0.9 once clipped), yet their excess helps: a command the teacher
-    saturates stays saturated when the student's own placo command, from its estimate, is off (README "Vision
-    students of a state player": raw labels scored best, margin 1 next, margin 0 worst)."""
+    saturates stays saturated when the student's own placo command, from its estimate, is off (docs/vision-students.md,
+    the table of students: raw labels scored best, margin 1 next, margin 0 worst)."""
 
     def __init__(self, obs: TensorDict, obs_groups: dict, obs_set: str, output_dim: int, corrections: int = 3,
                  margin: float = math.inf, **kwargs):

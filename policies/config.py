@@ -14,7 +14,7 @@ from policies.config_io import ConfigError, from_dict, to_dict
 
 @dataclasses.dataclass(frozen=True)
 class PPOConfig:
-    """PPO hyper-parameters (PAPERS.md section 1 defaults), shared by both backends where they apply."""
+    """PPO hyper-parameters (the usual legged-locomotion PPO defaults), shared by both backends where they apply."""
 
     learning_rate: float = 1e-3
     """Adam step size (adapted by the KL schedule in rsl-rl)."""

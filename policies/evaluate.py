@@ -29,7 +29,7 @@ def held_out(task: str, env_config):
 
 
 def ood_config(env_config):
-    """The env config out of the training distribution (issue 16): friction 0.1-0.25, a 4 kg payload, motor
+    """The env config out of the training distribution: friction 0.1-0.25, a 4 kg payload, motor
     strength 0.7-0.8 and pushes 1.5 times as strong; ValueError for tasks without dynamics randomisation."""
     r = getattr(env_config, "randomization", None)
     if r is None or not hasattr(r, "push_velocity"):

@@ -1,4 +1,4 @@
-"""HIB, the Historical Information Bottleneck (He et al., CoRL 2024; PAPERS.md section 3), as a loss.
+"""HIB, the Historical Information Bottleneck (He et al., CoRL 2024), as a loss.
 
 The history encoder q(z | h) should keep what predicts the privileged state s^p and drop the rest:
 minimise  -I(Z; S^p) + alpha * I(H; Z), with the standard bounds:

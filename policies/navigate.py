@@ -1,5 +1,5 @@
 """`legged navigate`: plan through a world or a user's scene, follow the plan with a trained waypoint
-follower, and replan when the robot strays from it (PAPERS.md section 1's hierarchy, end to end).
+follower, and replan when the robot strays from it (the planner-follower hierarchy, end to end).
 
 The robot walks in the height-map realisation of the scene (the maps the planner plans on, as MuJoCo
 height fields), in MJX or native MuJoCo. A replan starts from the robot's measured pose (moved to the
@@ -97,37 +97,63 @@ def load_follower(run_dir, robot: str = "project", physics: str | None = None):
 
 def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", threads: int | None = None,
              config: NavigateConfig = NavigateConfig(), planner: PlannerConfig = PlannerConfig(), seed: int = 0,
-             on_step=None, robot: str = "project") -> dict:
+             on_step=None, robot: str = "project", time_limit_s: float | None = None) -> dict:
     """Plan from start to goal, follow with the run's policy, replan on straying; the outcome as a dict.
     `on_step(env, state, plan)` is called at the start and after every control step but the last (viewers). Raises NavigationError (the
     policy cannot navigate, or the start or goal is unusable; Unreachable when no path exists) before any
-    compilation. `robot`: the robot model the follower walks (legged.robots.models)."""
+    compilation. `robot`: the robot model the follower walks (legged.robots.models). `time_limit_s`: the
+    navigation's time limit (default: 20 s plus `config.seconds_per_metre` per metre of the first plan)."""
+    report = navigate_seeds(run_dir, maps, start, goal, [seed], physics, threads, config, planner, on_step, robot,
+                            time_limit_s)[0]
+    report.pop("speeds_mps")
+    return report
+
+
+def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], physics: str = "native",
+                   threads: int | None = None, config: NavigateConfig = NavigateConfig(),
+                   planner: PlannerConfig = PlannerConfig(), on_step=None, robot: str = "project",
+                   time_limit_s: float | None = None, progress=None) -> list[dict]:
+    """`navigate` once per episode seed, planned and compiled once (the same plan, another episode each);
+    `progress()` is called after each. Each report also holds `speeds_mps`, the body's horizontal speed at every
+    control step."""
     policy, run_config = load_follower(run_dir, robot, physics)
     spec = task_entry(run_config.task).robot
     start, goal = np.asarray(start, float), np.asarray(goal, float)
     try:
-        plan = plan_path(maps, start, goal, spec, planner)
+        first_plan = plan_path(maps, start, goal, spec, planner)
     except PlanningError as exc:
         if "no collision-free path" in str(exc):
             raise Unreachable(f"the goal cannot be reached: {exc}") from None
         raise NavigationError(str(exc)) from None  # a start or goal where the robot does not fit
-    first_plan = plan
-    time_limit = 20.0 + config.seconds_per_metre * plan.length_m
+    time_limit = time_limit_s if time_limit_s is not None else 20.0 + config.seconds_per_metre * first_plan.length_m
     env_config = dataclasses.replace(run_config.env, num_worlds=1, curriculum=False, spawn_yaw=0.0,
                                      episode_seconds=time_limit)
     env = ConfinedEnv(env_config, spec, terrain_of(maps, start, goal),
-                      [plan.waypoints], path_capacity=PATH_CAPACITY)
+                      [first_plan.waypoints], path_capacity=PATH_CAPACITY)
     try:
         check_policy(policy, env)
     except RunDirError as exc:
         raise NavigationError(str(exc)) from None
     vector = VectorEnv(env, 1, physics, threads)
+    reports = []
+    for seed in seeds:
+        report = _follow(vector, env, policy, maps, goal, spec, first_plan, seed, config, planner, on_step)
+        reports.append(dict(report, physics=physics, time_limit_s=round(time_limit, 2), policy=str(policy.checkpoint),
+                            robot=run_config.env.robot_model))
+        if progress is not None:
+            progress()
+    return reports
+
+
+def _follow(vector, env, policy, maps, goal, spec, first_plan, seed, config, planner, on_step) -> dict:
+    """One navigation episode of `seed` along `first_plan`, replanning on straying or stalling."""
+    plan = first_plan
     batch = vector.reset(jax.random.PRNGKey(seed), level_carry(np.zeros(1), 0))
     policy.reset()
     if on_step is not None:
         on_step(env, batch.state, plan)
     obs, replans, failed_replans, walked = batch.state.obs, 0, 0, 0.0
-    last_waypoint, last_progress_step, steps = 1, 0, 0
+    last_waypoint, last_progress_step, steps, speeds = 1, 0, 0, []
     position = np.asarray(batch.state.pipeline_state.qpos)[0, :3]
     while True:
         batch, result = vector.step(batch, jnp.asarray(policy.act(actor_observation(obs, policy.inputs))))
@@ -137,7 +163,8 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
             break
         info = batch.state.info
         qpos = np.asarray(batch.state.pipeline_state.qpos)[0]
-        walked += float(np.linalg.norm(qpos[:2] - position[:2]))
+        speeds.append(float(np.linalg.norm(qpos[:2] - position[:2])) / env.dt)
+        walked += speeds[-1] * env.dt
         position = qpos[:3]
         waypoint = int(info["waypoint"][0])
         if waypoint != last_waypoint:
@@ -162,10 +189,11 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
             "time_to_goal_s": round(final["time_to_goal_s"], 3) if success else None,
             "collisions": int(final["collisions"]), "fell": bool(final["fell"] > 0), "replans": replans,
             "failed_replans": failed_replans, "path_length_m": round(first_plan.length_m, 4),
-            "walked_m": round(walked, 4), "final_distance_m": round(final["final_distance_m"], 4),
-            "planner": first_plan.planner, "plan_time_s": round(first_plan.plan_time_s, 4), "physics": physics,
-            "time_limit_s": round(time_limit, 2), "policy": str(policy.checkpoint),
-            "robot": run_config.env.robot_model}
+            "walked_m": round(walked, 4), "mean_speed_mps": round(float(np.mean(speeds)), 4) if speeds else 0.0,
+            "p95_speed_mps": round(float(np.percentile(speeds, 95)), 4) if speeds else 0.0,
+            "final_distance_m": round(final["final_distance_m"], 4),
+            "planner": first_plan.planner, "plan_time_s": round(first_plan.plan_time_s, 4),
+            "speeds_mps": np.round(np.asarray(speeds, float), 3)}
 
 
 def _hand_over(batch, waypoints: np.ndarray):

@@ -1,5 +1,5 @@
 """Markdown tables of evaluations side by side: `legged table RUN [RUN ...]` (one row per run, one column per
-metric and evaluation file), as the README's comparison tables are written."""
+metric and evaluation file), as the docs' comparison tables are written."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""KL-regularised RL towards a teacher (the soccer anchors' distillation, PAPERS.md section 2), as a loss.
+"""KL-regularised RL towards a teacher (how the humanoid soccer work distils skill teachers into one player), as a loss.
 
 The student trains with PPO on its own observations (the vision player: proprioception and the head
 camera; the critic reads the privileged state) and is pulled towards a frozen state-based teacher by

@@ -141,6 +141,31 @@ def test_warm_start_of_the_same_task_with_randomisation_draws_keeps_the_policy()
     assert torch.count_nonzero(first[:, 74:]) == 0
 
 
+def test_warm_start_into_a_state_with_past_steps_acts_as_the_walker():
+    """go1-flat with `env.past_steps` (the last steps' joint angles, velocities and actions in `state`) from the
+    walker trained without: the past inputs start at zero weight, so the first policy is the walker's."""
+    env = make("go1-flat", past_steps=3)
+    names = element_names(env.observation_layout()["state"])
+    assert sum(n.startswith("past_") for n in names) == 3 * 3 * 12
+    sizes = env.observation_dims()
+    rng = np.random.default_rng(1)
+    obs = dummy_observations(sizes, 32)
+    for key in obs.keys():
+        obs[key] = torch.as_tensor(rng.normal(size=obs[key].shape), dtype=torch.float32)
+    ppo = PPOConfig(actor_hidden=(128, 128, 128), critic_hidden=(128, 128, 128))
+    new = build_ppo(obs, 32, 12, ppo, "cpu")
+    note = warm_start(new, WALKER, env, obs, "go1-flat")
+    assert f"state: 42 of {sizes['state']}" in note, note
+    walker = build_ppo(dummy_observations(make("go1-flat").observation_dims(), 32), 32, 12, ppo, "cpu")
+    payload = torch.load(sorted((WALKER / "checkpoints").glob("*.pt"))[-1], weights_only=True)
+    walker.actor.load_state_dict(payload["alg"]["actor_state_dict"])
+    walker_obs = obs.clone()
+    walker_obs["state"] = obs["state"][:, [i for i, n in enumerate(names) if not n.startswith("past_")]]
+    with torch.no_grad():
+        assert torch.allclose(new.actor(obs, stochastic_output=False),
+                              walker.actor(walker_obs, stochastic_output=False), atol=1e-5)
+
+
 def test_navigation_geometry():
     """How far the robot is from its plan, and its pose from a free joint (the replanning trigger)."""
     import mujoco

@@ -1,4 +1,4 @@
-"""The import layering of DESIGN.md, enforced: core <- planners, policies <- web <- command line.
+"""The import layering, enforced: core <- planners, policies <- web <- command line.
 
 Every import statement of every module (top level or inside a function) is read from the source with
 `ast`, so a lazy import counts as much as one at the top of a file.

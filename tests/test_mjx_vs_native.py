@@ -9,7 +9,7 @@ FLAT_QPOS_TOL = 1e-3
 """Max |qpos| gap after 25 control steps (100 physics steps) on the plane, random actions."""
 CONFINED_BASE_TOL = 0.05
 """Max base position gap (m) after 5 control steps on height fields. MJX and native MuJoCo generate
-height-field contacts differently (README, "MJX vs native"): measured 0.028 m for the base and 0.088 rad
+height-field contacts differently (docs/environments.md, "MJX vs native MuJoCo"): measured 0.028 m for the base and 0.088 rad
 for the joints after 5 steps, so only the base is held to a (loose) bound here."""
 
 

@@ -51,7 +51,7 @@ def test_bad_terrain_configs_name_the_field(bad, match):
 
 @pytest.fixture(scope="module")
 def rough():
-    config = RoughConfig(terrain=SMALL, history_steps=3, episode_seconds=2.0,
+    config = RoughConfig(terrain=SMALL, history_steps=3, past_steps=2, episode_seconds=2.0,
                          randomization=RandomizationConfig(enabled=True, push_interval_s=0.1, push_velocity=1.0))
     env = RoughEnv(config)
     return env, VectorEnv.of(env, 4, "native", threads=1).native
@@ -66,7 +66,7 @@ def test_history_pushes_and_privileged_terrain(rough):
     assert np.allclose(np.asarray(obs["history"]).reshape(4, 3, -1), first[:, None])  # a new episode repeats it
     layout = dict(env.observation_layout()["privileged_state"])
     assert layout["task"] == 4 * 9 + 1
-    pushed = []
+    pushed, seen, clean = [], [first], np.asarray(obs["privileged_state"])[:, :first.shape[1]]
     for k in range(6):
         before = np.asarray(state.pipeline_state.qvel)
         state = native.step(state, jnp.zeros((4, 12)))
@@ -74,13 +74,23 @@ def test_history_pushes_and_privileged_terrain(rough):
         assert np.allclose(history[:, -1], state.obs["state"])  # newest last, oldest first
         assert np.allclose(history[:, -2], first)  # the step before
         first = np.asarray(state.obs["state"])
+        seen.append(first)
         pushed.append(bool(np.asarray(state.info["teleported"]).all()))
         if pushed[-1]:  # the kick reached the engine: its velocity is the view's
             assert np.allclose(native.physics.batch.bind("qvel")[:, :2], np.asarray(state.pipeline_state.qvel)[:, :2])
             assert np.abs(np.asarray(state.pipeline_state.qvel)[:, :2] - before[:, :2]).max() > 0.05
     assert pushed == [False, False, False, False, True, False]  # every 0.1 s = 5 control steps
     names = [n for n, _ in env.observation_layout()["state"]]
-    assert names[:2] == ["gravity", "gyro"]  # the IMU's angular velocity, body frame, clean in the privileged copy
+    assert names[:2] == ["gravity", "gyro"]
+    part = lambda name, obs: obs[:, slices[name]]
+    slices, at = {}, 0
+    for name, size in env.observation_layout()["state"]:
+        slices[name], at = slice(at, at + size), at + size
+    for name in ("joint_pos", "joint_vel", "last_action"):  # past_steps=2: the two steps before, as observed then
+        past = part(f"past_{name}", seen[-1]).reshape(4, 2, 12)
+        assert np.allclose(past[:, 1], part(name, seen[-2])) and np.allclose(past[:, 0], part(name, seen[-3]))
+        assert np.allclose(part(f"past_{name}", seen[0]).reshape(4, 2, 12), part(name, clean)[:, None])  # a new
+        # episode's: its first values (clean: no observation came before)  # the IMU's angular velocity, body frame, clean in the privileged copy
     assert np.allclose(np.asarray(state.obs["privileged_state"])[:, 3:6], np.asarray(state.pipeline_state.qvel)[:, 3:6])
     feet = np.asarray(jax.vmap(env.feet_positions)(state.pipeline_state))
     heights = np.asarray(state.obs["privileged_state"])[:, -37:-1].reshape(4, 4, 9)

@@ -34,6 +34,10 @@ from legged.worlds.mjcf import SceneOptions, compile_scene
 from legged.worlds.terrain import Terrain
 
 
+PAST_PARTS = ("joint_pos", "joint_vel", "last_action")
+"""The `state` entries `EnvConfig.past_steps` remembers, in the order they appear as past_<name>."""
+
+
 class LeggedEnv(MjxEnv, abc.ABC):
     """A Brax-compatible MJX environment for one legged robot on a terrain."""
 
@@ -82,8 +86,9 @@ class LeggedEnv(MjxEnv, abc.ABC):
         self._weight = float(m.body_subtreemass[self._trunk] * 9.81)
         self._foot_bodies = np.array(m.geom_bodyid[self._feet])
         self._foot_offsets = jnp.asarray(m.geom_pos[self._feet], jnp.float32)
-        if config.history_steps < 0:
-            raise ValueError(f"history_steps must be >= 0 (0: no history observation), got {config.history_steps}")
+        for name in ("history_steps", "past_steps"):
+            if getattr(config, name) < 0:
+                raise ValueError(f"{name} must be >= 0 (0: none), got {getattr(config, name)}")
         push = config.randomization
         if push.push_interval_s < 0 or push.push_velocity < 0:
             raise ValueError(f"push_interval_s and push_velocity must be >= 0, got {push.push_interval_s} and "
@@ -351,8 +356,15 @@ class LeggedEnv(MjxEnv, abc.ABC):
         state += [("command", cmd, jnp.zeros_like(cmd)),
                   ("joint_pos", q, jnp.full_like(q, noise.joint_pos)),
                   ("joint_vel", qd, jnp.full_like(qd, noise.joint_vel)),
-                  ("last_action", info["last_action"], jnp.zeros(self.action_size)),
-                  ("exteroception", ext, ext_noise)]
+                  ("last_action", info["last_action"], jnp.zeros(self.action_size))]
+        if self.config.past_steps:  # as observed then (noise and biases included): no noise of their own
+            past = info.get("past")
+            if past is None:  # a new episode: its first values repeated
+                past = jnp.broadcast_to(jnp.stack([q, qd, info["last_action"]])[:, None],
+                                        (3, self.config.past_steps, q.shape[0]))
+            state += [(f"past_{n}", past[i].reshape(-1), jnp.zeros(past[i].size))
+                      for i, n in enumerate(PAST_PARTS)]
+        state.append(("exteroception", ext, ext_noise))
         dr = info["dr"]
         privileged = [("base_lin_vel", rotate_inv(rot, data.qvel[0:3])), ("base_ang_vel", data.qvel[3:6]),
                       ("contact_forces", self.slot_forces(data.contact_force) / self._weight),
@@ -383,7 +395,22 @@ class LeggedEnv(MjxEnv, abc.ABC):
             history = jnp.concatenate([past[1:], state[None]])
             info = dict(info, history=history)
             obs["history"] = history.reshape(-1)
+        if self.config.past_steps:
+            info = dict(info, past=self._remember(state_parts, state, info))
         return obs, info
+
+    def _remember(self, state_parts: list, state: jax.Array, info) -> jax.Array:
+        """The `past_steps` memory after this step: the oldest entry dropped, this step's observed joint angles,
+        joint velocities and last action appended (3 x past_steps x joints)."""
+        start, now = 0, {}
+        for name, value, _ in state_parts:
+            now[name] = state[start:start + value.shape[0]]
+            start += value.shape[0]
+        current = jnp.stack([now[n] for n in PAST_PARTS])
+        past = info.get("past")
+        if past is None:
+            return jnp.broadcast_to(current[:, None], (3, self.config.past_steps) + current.shape[1:])
+        return jnp.concatenate([past[:, 1:], current[:, None]], axis=1)
 
     @staticmethod
     def _sensor_bias(state_parts: list, dr: dict) -> jax.Array | float:

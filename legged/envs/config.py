@@ -131,6 +131,10 @@ class EnvConfig:
     history_steps: int = 0
     """When > 0, the observation `history` holds the last this many `state` vectors (oldest first, the current
     one last): what a deployable student remembers."""
+    past_steps: int = 0
+    """When > 0, `state` also holds the joint angles, joint velocities and actions of the last this many control
+    steps as they were observed (oldest first): enough memory for a plain MLP policy to tell the robot's joint
+    damping, friction and latency apart, which a memoryless one cannot (0: none)."""
 
     @property
     def n_substeps(self) -> int:

@@ -1,4 +1,4 @@
-"""Confined-space navigation for a quadruped: tunnels with floors and ceilings (PAPERS.md section 1).
+"""Confined-space navigation for a quadruped: tunnels with floors and ceilings (after Xu et al., ICRA 2024).
 
 One environment class, four tasks that differ only in what the policy is told and rewarded for:
 - `waypoints` (hierarchical follower): the next body-pose waypoint of a planned path;

@@ -1,6 +1,6 @@
 """go1-rough: blind velocity tracking on slopes, stairs and bumps, with domain randomisation and pushes.
 
-The task where privileged information matters (issue 16): `state` is what the robot can measure
+The task where privileged information matters: `state` is what the robot can measure
 (proprioception, IMU gravity, command; noisy), `privileged_state` adds what it cannot: base velocity, contact
 forces, the randomised dynamics and the terrain heights around each foot. A terrain curriculum (legged_gym's,
 measured against what each command asks: see `RoughEnv.carry`) moves each environment a level up after it

@@ -12,8 +12,8 @@ TEAMS = ("home", "away")
 class SoccerSceneConfig:
     """Everything that shapes the soccer scene; the defaults are the 1v1 OP3 pitch.
 
-    The pitch follows PAPERS.md section 2 (about 5 x 4 m for the OP3 game). Goal, ball and line sizes are
-    not given there: they are chosen here (RoboCup KidSize proportions scaled to this pitch) and named as
+    The pitch is about 5 x 4 m, the size of the small-humanoid soccer work the OP3 game follows. Goal, ball
+    and line sizes are not given there: they are chosen here (RoboCup KidSize proportions scaled to this pitch) and named as
     choices, to be randomised or tuned by the tasks.
     """
 

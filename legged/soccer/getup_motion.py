@@ -1,4 +1,4 @@
-"""ROBOTIS' scripted OP3 get-ups as reference motions of the get-up skill (op3-getup, issue 18).
+"""ROBOTIS' scripted OP3 get-ups as reference motions of the get-up skill (op3-getup).
 
 ROBOTIS ships two get-ups for the real OP3 in its action module (op3_action_module's motion_4095.bin, page
 122 `f_get_up` from the front and page 123 `b_get_up` from the back). Their key poses, converted from servo

@@ -1,4 +1,4 @@
-"""OP3 skills learned one at a time (issue 18), as in the anchors' skill teachers (Haarnoja et al. 2024):
+"""OP3 skills learned one at a time, as in the anchors' skill teachers (Haarnoja et al. 2024):
 
 - `op3-walk` (WalkSkillEnv): the walk drill made a training task. The policy reads its proprioception, the
   velocity command and a gait clock, and is rewarded for tracking the command and for imitating the

@@ -2,7 +2,7 @@
 
 A world is a tunnel (length from the difficulty, 1.6 m wide) with a little free space beyond each
 end, closed by solid walls. Both the floor
-and the ceiling carry a grid of square pyramids (PAPERS.md section 1): ceiling pyramids hang down
+and the ceiling carry a grid of square pyramids (as in Xu et al., ICRA 2024): ceiling pyramids hang down
 U[0.15, 0.35] m from the nominal ceiling, floor pyramids are lower bumps. The ceiling never comes
 closer to the floor than `min_clearance`, and start and goal sit in flat free zones.
 """
