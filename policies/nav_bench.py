@@ -30,7 +30,8 @@ def scene_row(scene, reports: list[dict], speed: float) -> dict:
     mean = lambda key: round(float(np.mean([r[key] for r in reports])), 3)
     return {"scene": scene.name, "description": scene.description, "episodes": len(reports), "successes": len(wins),
             "success_rate": round(len(wins) / len(reports), 4), "time_limit_s": scene.time_limit_s,
-            "path_length_m": reports[0]["path_length_m"], "time_to_goal_s": _median([r["time_to_goal_s"] for r in wins]),
+            "path_length_m": reports[0]["path_length_m"],
+            "time_to_goal_s": _median([r["time_to_goal_s"] for r in wins]),
             "time_vs_path_at_speed": _median(at_limit),
             "mean_speed_mps": round(float(speeds.mean()), 3) if len(speeds) else 0.0,
             "p95_speed_mps": round(float(np.percentile(speeds, 95)), 3) if len(speeds) else 0.0,
@@ -65,9 +66,9 @@ def bench_navigate(scenes_dir, policy_dir, seeds: int = 5, first_seed: int = 0, 
         bar.set_postfix_str(scene.name)
         try:
             maps = navigation_maps(model, scene.start, scene.goal, resolution)
-            reports = navigate_seeds(policy_dir, maps, scene.start, scene.goal, list(range(first_seed, first_seed + seeds)),
-                                     physics, threads, planner=planner, robot=robot, time_limit_s=scene.time_limit_s,
-                                     progress=bar.update)
+            reports = navigate_seeds(policy_dir, maps, scene.start, scene.goal,
+                                     list(range(first_seed, first_seed + seeds)), physics, threads, planner=planner,
+                                     robot=robot, time_limit_s=scene.time_limit_s, progress=bar.update)
         except (Unreachable, NavigationError) as exc:  # the planner's failure is the benchmark's result
             rows.append(_unplanned(scene, seeds, str(exc)))
             bar.update(seeds)

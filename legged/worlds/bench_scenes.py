@@ -52,8 +52,8 @@ def _ramp(name: str, x0: float, z0: float, x1: float, z1: float, width: float) -
     pitch, t = math.atan2(z1 - z0, x1 - x0), 0.05
     length = math.hypot(x1 - x0, z1 - z0)
     cx, cz = (x0 + x1) / 2 + t * math.sin(pitch), (z0 + z1) / 2 - t * math.cos(pitch)
-    return (f'    <geom name="{name}" type="box" pos="{cx:.4f} 0.0000 {cz:.4f}" size="{length / 2:.4f} {width / 2:.4f} {t:.4f}" '
-            f'euler="0 {-pitch:.6f} 0"/>')
+    return (f'    <geom name="{name}" type="box" pos="{cx:.4f} 0.0000 {cz:.4f}" '
+            f'size="{length / 2:.4f} {width / 2:.4f} {t:.4f}" euler="0 {-pitch:.6f} 0"/>')
 
 
 def _straight(name: str, width: float, roof: float | None, description: str, extra: list[str] = (),
@@ -120,7 +120,8 @@ def _course() -> Scene:
     geoms = corridor("low", [(-1.1, 0.0), (4.0, 0.0), (4.0, 1.8)], 1.2, 0.55, closed=False)
     geoms.append(pipe("bar", 2.2, 0.0, 0.40, 0.04, 1.2))
     geoms += corridor("wide", [(4.0, 1.8), (4.0, 4.0), (6.2, 4.0)], 1.6, 0.70, closed=False)
-    geoms += [box("block_a", (3.65, 2.9, 0.35), (0.45, 0.2, 0.35)), box("block_b", (5.3, 4.35, 0.35), (0.2, 0.45, 0.35))]
+    geoms += [box("block_a", (3.65, 2.9, 0.35), (0.45, 0.2, 0.35)),
+              box("block_b", (5.3, 4.35, 0.35), (0.2, 0.45, 0.35))]
     geoms += _floor_with_gaps("floor_a", (-1.5, 0.0), (4.0, 0.0), 3.0, [])
     geoms += _floor_with_gaps("floor_b", (4.0, -1.0), (4.0, 4.0), 3.0, [])
     geoms += _floor_with_gaps("floor_c", (2.5, 4.0), (9.0, 4.0), 3.0, [(4.5, 0.15)])

@@ -1,4 +1,4 @@
-"""Navigation scenes written from MuJoCo primitives, as a user would build them, and the benchmark set of them.
+"""Navigation scenes written from MuJoCo primitives, as a user would build them: builders, reading, writing.
 
 A scene is a standalone MJCF file: boxes and cylinders on a floor (a plane, or boxes over a deeper plane where the
 floor has voids), and three things a navigation needs, kept in the file itself:
@@ -64,7 +64,8 @@ def box(name: str, centre, half, yaw: float = 0.0) -> str:
 
 def pillar(name: str, x: float, y: float, radius: float, height: float) -> str:
     """A vertical cylinder standing on z = 0."""
-    return f'    <geom name="{name}" type="cylinder" pos="{_f((x, y, height / 2))}" size="{radius:.4f} {height / 2:.4f}"/>'
+    return (f'    <geom name="{name}" type="cylinder" pos="{_f((x, y, height / 2))}" '
+            f'size="{radius:.4f} {height / 2:.4f}"/>')
 
 
 def pipe(name: str, x: float, y: float, underside: float, radius: float, length: float, yaw: float = 0.0) -> str:
@@ -111,8 +112,8 @@ def corridor(name: str, points, width: float, roof: float | None, wall_height: f
         for end, (a, b) in (("start", (points[0], points[1])), ("end", (points[-1], points[-2]))):
             v = (a - b) / np.linalg.norm(a - b)
             c = a + WALL * v
-            geoms.append(box(f"{name}_{end}_cap", (c[0], c[1], wall_height / 2), (WALL, width / 2 + 2 * WALL, wall_height / 2),
-                             math.atan2(v[1], v[0])))
+            geoms.append(box(f"{name}_{end}_cap", (c[0], c[1], wall_height / 2),
+                             (WALL, width / 2 + 2 * WALL, wall_height / 2), math.atan2(v[1], v[0])))
     if roof is not None:
         for k, (a, b) in enumerate(zip(points[:-1], points[1:])):
             v = b - a
