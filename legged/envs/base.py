@@ -350,7 +350,10 @@ class LeggedEnv(MjxEnv, abc.ABC):
         qd = self.joint_velocities(data)
         ext, ext_noise = self._exteroception(data, info)
         cmd = self._command(data, info)
-        state = [("gravity", rotate_inv(rot, jnp.array([0.0, 0.0, -1.0])), jnp.full(3, noise.gravity))]
+        state = []
+        if self.config.velocity_in_state:  # as a state estimator gives it
+            state.append(("lin_vel", rotate_inv(rot, data.qvel[0:3]), jnp.full(3, noise.lin_vel)))
+        state.append(("gravity", rotate_inv(rot, jnp.array([0.0, 0.0, -1.0])), jnp.full(3, noise.gravity)))
         if self.config.gyro_in_state:
             state.append(("gyro", data.qvel[3:6], jnp.full(3, noise.gyro)))
         state += [("command", cmd, jnp.zeros_like(cmd)),

@@ -31,6 +31,10 @@ class RandomizationConfig:
     """Range of each actuated joint's armature (rotor inertia), kg m^2, drawn per joint (None: the model's own)."""
     joint_frictionloss: tuple[float, float] | None = None
     """Range of each actuated joint's dry friction, N m, drawn per joint (None: the model's own)."""
+    joint_spread: float | None = None
+    """How the joint ranges above are drawn: None draws each joint on its own; a number draws one value per robot
+    from the range and spreads it over the joints by a factor uniform in 1 +- this (clipped to the range), so that
+    robots whose joints are all low (or all high) are drawn, as real and reference models are."""
     contact_softness: tuple[float, float] | None = None
     """Range of the feet's contact softness s: solimp = (1 - s) * MuJoCo's default + s * SOFT_SOLIMP, from the plain
     contact (0) to the soft feet of MuJoCo Menagerie's Go1 (1) (None: the model's own)."""
@@ -63,7 +67,7 @@ SOFT_SOLIMP = (0.015, 1.0, 0.023, 0.5, 2.0)
 
 COVERING = dict(joint_damping=(0.3, 2.5), joint_armature=(0.004, 0.02), joint_frictionloss=(0.1, 1.2),
                 contact_softness=(0.0, 1.0), contact_timeconst=(0.01, 0.03), contact_margin=(0.0, 0.002),
-                contact_spin=(0.0, 1.5),
+                contact_spin=(0.0, 1.5), joint_spread=0.6,
                 latency_s=(0.0, 0.02), encoder_offset=0.02, imu_bias=(0.03, 0.05))
 """Ranges of the model randomisation that covers every reference model of the Go1 (the project's, MuJoCo Menagerie's
 and MuJoCo Playground's: damping 0.5-2, armature 0.005-0.01, friction loss 0.2-1.0, plain to soft feet with 0-1 mm of
@@ -91,6 +95,8 @@ class NoiseConfig:
     """Noise on height-scan values, metres."""
     gyro: float = 0.2
     """Noise on the IMU's angular velocity (with `EnvConfig.gyro_in_state`), rad/s."""
+    lin_vel: float = 0.1
+    """Noise on the estimated body velocity (with `EnvConfig.velocity_in_state`), m/s."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -121,6 +127,11 @@ class EnvConfig:
     gyro_in_state: bool = False
     """`state` also holds the IMU's angular velocity (body frame; right after the projected gravity), as a real
     robot measures it. Off for the tasks whose shipped policies were trained without it; on for go1-rough."""
+    velocity_in_state: bool = False
+    """`state` also holds the body's linear velocity in its own frame (first), as a legged robot's state estimator
+    (IMU and leg odometry) gives it: with it a walker can see how well it tracks its command and correct for the
+    robot it walks on; without it, it can only replay a gait learned for one set of dynamics. Off for the tasks whose
+    shipped policies were trained without it."""
     motor_curve: bool = False
     """Limit each servo's torque to its motor's torque-speed line (RobotSpec.motor_speeds): the force limit at rest
     falling to 0 at the motor's free speed when torque and motion agree (braking keeps the force limit); applied to the

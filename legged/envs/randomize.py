@@ -38,7 +38,8 @@ def draw(c: RandomizationConfig, rng: jax.Array, nbody: int, nu: int, sim_dt: fl
 
 def draw_model(c, rng: jax.Array, nu: int, sim_dt: float, n_substeps: int) -> dict:
     """The model quantities of one robot that `c` (a RandomizationConfig or a SoccerRandomization) sets, drawn from
-    `rng`: its `nu` joints' damping, armature and friction loss, its feet's contact softness, time constant and
+    `rng`: its `nu` joints' damping, armature and friction loss (each joint on its own, or with `joint_spread` one
+    value per robot spread over its joints), its feet's contact softness, time constant and
     margin, the action latency in whole physics steps (of `sim_dt`, at most `n_substeps`), encoder offsets and IMU
     biases (the quantities left unset, None or 0, are not drawn)."""
     dr = {}
@@ -47,8 +48,15 @@ def draw_model(c, rng: jax.Array, nu: int, sim_dt: float, n_substeps: int) -> di
     ranges = (("damping", c.joint_damping, (nu,)), ("armature", c.joint_armature, (nu,)),
               ("frictionloss", c.joint_frictionloss, (nu,)), ("softness", c.contact_softness, ()),
               ("timeconst", c.contact_timeconst, ()), ("margin", c.contact_margin, ()))
+    spread = getattr(c, "joint_spread", None)
     for i, (key, r, shape) in enumerate(ranges):
-        if r is not None:
+        if r is None:
+            continue
+        if spread is not None and shape:  # one value per robot, spread over its joints
+            common, factor = jax.random.split(more[i])
+            value = u(common, r) * (1.0 + spread * jax.random.uniform(factor, shape, minval=-1.0, maxval=1.0))
+            dr[key] = jnp.clip(value, r[0], r[1])
+        else:
             dr[key] = u(more[i], r, shape)
     if getattr(c, "contact_spin", None) is not None:  # its own key: the others draw what they drew before it
         dr["spin"] = u(jax.random.fold_in(rng, 2), c.contact_spin)
