@@ -20,7 +20,8 @@ from tqdm import tqdm
 
 from legged.robots import GO1
 from legged.robots.spec import RobotSpec
-from legged.worlds.generator import World, generate_world
+from legged.worlds.generator import World
+from legged.worlds.levels import LevelConfig, make_world
 from planners.body_planner import Plan, PlannerConfig, PlanningError, plan_path
 from legged.worlds.maps import HeightMaps
 
@@ -111,17 +112,19 @@ def plan_worlds(worlds: list[World], robot: RobotSpec = GO1, config: PlannerConf
 
 def feasible_worlds(num_worlds: int, seed: int, difficulties, world_config, robot: RobotSpec = GO1,
                     config: PlannerConfig = PlannerConfig(), cache_dir=None, workers: int = 1,
-                    max_tries: int = 5, progress: bool = True) -> tuple[list[World], list[Plan]]:
+                    max_tries: int = 5, progress: bool = True,
+                    levels: LevelConfig | None = None) -> tuple[list[World], list[Plan]]:
     """`num_worlds` generated worlds with planned paths; a world with no path is replaced by a fresh one
-    of the same difficulty (the first try of slot k is the world Terrain.generate would use)."""
+    of the same difficulty (the first try of slot k is the world Terrain.generate would use; with `levels`, the
+    level worlds of legged.worlds.levels instead of the tunnels of `world_config`)."""
     worlds: list[World | None] = [None] * num_worlds
     plans: list[Plan | None] = [None] * num_worlds
     for attempt in range(max_tries):
         slots = [k for k in range(num_worlds) if plans[k] is None]
         if not slots:
             break
-        tries = [generate_world(seed * 100_003 + k + attempt * num_worlds, difficulties[k % len(difficulties)],
-                                world_config) for k in slots]
+        tries = [make_world(seed * 100_003 + k + attempt * num_worlds, difficulties[k % len(difficulties)],
+                            world_config, levels) for k in slots]
         for k, world, (result, _) in zip(slots, tries, plan_worlds(tries, robot, config, cache_dir, workers, progress)):
             if isinstance(result, Plan):
                 worlds[k], plans[k] = world, result

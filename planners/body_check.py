@@ -3,9 +3,14 @@
 The box (half extents plus a margin) is sampled on all six faces at no more than half the map
 resolution and rotated by the full roll, pitch and yaw: the lower samples must lie above the floor,
 the upper ones below the ceiling. The legs must reach the floor: at each foot's nominal stance point
-the body (tilt included) must stand within the robot's `body_height_range` above the floor there.
-Poses are checked in batches (all states of a motion at once), which is what makes planning in
-Python fast enough.
+the body (tilt included) must stand within the robot's `body_height_range` above the floor there, or
+at one of the foot's alternative points: a little inward (a narrower stance) or a stride fore or aft
+(stepping over a gap in the floor). Poses are checked in batches (all states of a motion at once),
+which is what makes planning in Python fast enough.
+
+The planner's maps are more conservative than the world (`step_walls`): a floor edge higher than the robot
+steps up or down is a wall to it, except the rims of gaps narrow enough to stride over. The robot itself
+walks the unaltered world.
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ import dataclasses
 
 import mujoco
 import numpy as np
+from scipy import ndimage
 
 from legged.robots.spec import RobotSpec
 from legged.worlds.maps import HeightMaps
@@ -78,22 +84,89 @@ class BodyCheckConfig:
     stance_slack: float = 0.05
     """A foot whose nominal stance point has no floor within reach may step up to this far inward (a narrower
     stance, toward the body's centre line), metres; 0 keeps the nominal stance."""
+    stride_slack: float = 0.18
+    """... or this far fore or aft, metres: a foot over a gap in the floor steps across it, so gaps up to about
+    twice this wide are crossed and wider ones are not (0: the feet never step fore or aft)."""
+    step_height: float | None = 0.10
+    """A floor edge higher than this between two free columns is a wall to the planner (its lower side turns solid
+    for one cell), except the rims of gaps up to 2 * stride_slack wide, which the feet stride over; metres (None:
+    no such walls)."""
+
+
+def step_walls(maps: HeightMaps, step_height: float, gap: float) -> tuple[HeightMaps, int]:
+    """(maps in which the lower side of every floor edge higher than `step_height` is solid, how many cells turned
+    solid). Edges are looked for between free neighbours (walls are no steps) on the floor with its gaps up to
+    `gap` wide filled (a grey-scale closing by a disc of that diameter fills pits narrower than the disc and leaves
+    steps as they are), so the rims of gaps the feet can stride over stay open."""
+    floor, ceiling, res = np.asarray(maps.floor, float), np.asarray(maps.ceiling, float), maps.resolution
+    free = ceiling - floor > 1e-6
+    radius = max(int(round(gap / 2 / res)), 0)
+    offsets = np.arange(-radius, radius + 1)
+    disc = np.hypot(*np.meshgrid(offsets, offsets, indexing="ij")) <= radius + 1e-9
+    raised = ndimage.maximum_filter(np.where(free, floor, -np.inf), footprint=disc, mode="nearest")
+    filled = ndimage.minimum_filter(np.where(free, raised, np.inf), footprint=disc, mode="nearest")
+    filled = np.where(free, np.maximum(filled, floor), floor)
+    solid = np.zeros_like(free)
+    for axis in (0, 1):
+        lo, hi = [slice(None)] * 2, [slice(None)] * 2
+        lo[axis], hi[axis] = slice(None, -1), slice(1, None)
+        a, b = filled[tuple(lo)], filled[tuple(hi)]
+        both = free[tuple(lo)] & free[tuple(hi)]
+        solid[tuple(lo)] |= both & (b - a > step_height)  # a is the lower side
+        solid[tuple(hi)] |= both & (a - b > step_height)
+    count = int(solid.sum())
+    if not count:
+        return maps, 0
+    walled = dataclasses.replace(maps, floor=np.where(solid, ceiling, floor).astype(maps.floor.dtype))
+    return walled, count
+
+
+def widest_band(low, high, starts, ends) -> tuple[np.ndarray, np.ndarray]:
+    """The widest interval of heights z in [low, high] at which every foot f finds a choice c with starts[..., f, c]
+    <= z <= ends[..., f, c] (the union of each foot's intervals, intersected over the feet), exactly: (z_low,
+    z_high), with z_low > z_high where there is none. low, high (...,); starts, ends (..., feet, choices); an
+    unavailable choice has start inf."""
+    low, high = np.asarray(low, float), np.asarray(high, float)
+    starts, ends = np.asarray(starts, float), np.asarray(ends, float)
+    lead = low.shape
+    candidates = np.concatenate([low[..., None], starts.reshape(lead + (-1,))], -1)  # (..., K)
+    s, e = starts[..., None, :, :], ends[..., None, :, :]                                # (..., 1, F, C)
+    z = candidates[..., :, None, None]                                                   # (..., K, 1, 1)
+    inside = (s <= z + 1e-12) & (e >= z - 1e-12)
+    reach = np.max(np.where(inside, e, -np.inf), axis=-1)                                # (..., K, F)
+    for _ in range(starts.shape[-1] - 1):  # a foot's intervals may overlap: follow its union upward
+        reach = np.maximum(reach, np.max(np.where(s <= reach[..., None] + 1e-12, e, -np.inf), axis=-1))
+    top = np.minimum(high[..., None], np.min(reach, axis=-1))                           # (..., K)
+    width = np.where(candidates >= low[..., None] - 1e-12, top - candidates, -np.inf)
+    best = np.argmax(width, axis=-1)[..., None]
+    z_low = np.take_along_axis(candidates, best, -1)[..., 0]
+    z_high = np.take_along_axis(top, best, -1)[..., 0]
+    none = ~np.isfinite(np.take_along_axis(width, best, -1)[..., 0])
+    return np.where(none, np.inf, z_low), np.where(none, -np.inf, z_high)
 
 
 class BodyChecker:
-    """Validity of body poses (x, y, z, roll, pitch, yaw) in one pair of height maps."""
+    """Validity of body poses (x, y, z, roll, pitch, yaw) in one pair of height maps (made conservative by
+    `step_walls` where the config asks)."""
 
     def __init__(self, maps: HeightMaps, robot: RobotSpec, config: BodyCheckConfig = BodyCheckConfig()):
-        self.maps, self.robot, self.config = maps, robot, config
+        self.robot, self.config, self.walled_cells = robot, config, 0
+        if config.step_height is not None:
+            maps, self.walled_cells = step_walls(maps, config.step_height, 2 * config.stride_slack)
+        self.maps = maps
         self.half_extents = np.asarray(robot.body_box_half_extents, float) + config.margin
         faces = box_surface_points(self.half_extents, maps.resolution / 2)
         self.bottom_points = faces[faces[:, 2] < 0]  # bottom face and the lower half of the sides
         self.top_points = faces[faces[:, 2] > 0]
         stance = stance_points(robot)
         self.stance_points = np.concatenate([stance, np.zeros((len(stance), 1))], 1)
-        inward = stance.copy()
+        inward = self.stance_points.copy()
         inward[:, 1] -= np.sign(stance[:, 1]) * np.minimum(config.stance_slack, np.abs(stance[:, 1]))
-        self.narrow_stance_points = np.concatenate([inward, np.zeros((len(stance), 1))], 1)
+        fore, aft = self.stance_points.copy(), self.stance_points.copy()
+        fore[:, 0] += config.stride_slack
+        aft[:, 0] -= config.stride_slack
+        self.stance_choices = np.stack([self.stance_points, inward, fore, aft])
+        """(choices, feet, 3): where each foot may stand, in the body frame: nominal first, then inward, fore, aft."""
         self.height_range = robot.body_height_range
 
     def _world(self, poses: np.ndarray, rot: np.ndarray, body_points: np.ndarray) -> np.ndarray:
@@ -104,20 +177,23 @@ class BodyChecker:
         return self.maps.lookup(points[..., :2].reshape(-1, 2), ceiling).reshape(n, p)
 
     def stance_heights(self, poses, rot: np.ndarray | None = None) -> np.ndarray:
-        """Height of the body above the floor at each foot's stance point, shape (n, n_feet) (nan off the map):
-        the nominal point, or the narrower one (`stance_slack`) where only that one is within reach.
+        """Height of the body above the floor at each foot, shape (n, n_feet) (nan off the map): at its nominal
+        stance point, or at the first alternative point (`stance_choices`) within reach where the nominal is not.
 
         `rot` may pass the poses' rotation matrices when the caller has them already.
         """
         poses = np.atleast_2d(np.asarray(poses, float))
         if rot is None:
             rot = rotation_rpy(poses[:, 3], poses[:, 4], poses[:, 5])
-        nominal, narrow = (self._world(poses, rot, p) for p in (self.stance_points, self.narrow_stance_points))
-        h_nominal = nominal[..., 2] - self._surface(nominal)
-        h_narrow = narrow[..., 2] - self._surface(narrow)
+        heights = []
+        for points in self.stance_choices:
+            world = self._world(poses, rot, points)
+            heights.append(world[..., 2] - self._surface(world))
+        heights = np.stack(heights)                                   # (choices, n, feet)
         lo, hi = self.height_range
-        reach = lambda h: (h >= lo - 1e-9) & (h <= hi + 1e-9)
-        return np.where(~reach(h_nominal) & reach(h_narrow), h_narrow, h_nominal)
+        reach = (heights >= lo - 1e-9) & (heights <= hi + 1e-9)
+        first = np.where(reach.any(0), np.argmax(reach, axis=0), 0)
+        return np.take_along_axis(heights, first[None], 0)[0]
 
     def codes(self, poses) -> np.ndarray:
         """Validity code of each pose in (n, 6): VALID, OFF_MAP, OUT_OF_REACH, HITS_CEILING or HITS_FLOOR."""

@@ -254,9 +254,9 @@ def plan_path(maps: HeightMaps, start, goal, robot: RobotSpec = GO1, config: Pla
     if name in (LATTICE, AUTO) and config.space != "projected":
         raise PlanningError(f"the {name} planner searches the projected space: use space='projected'")
     if config.space == "projected":
-        space = ProjectedSpace(maps, checker, config, heading)
+        space = ProjectedSpace(checker.maps, checker, config, heading)
     else:
-        space = _Space(maps, robot, config, heading, checker)
+        space = _Space(checker.maps, robot, config, heading, checker)
     _check_endpoint("start", start_pose, checker, space, config)
     _check_endpoint("goal", goal_pose, checker, space, config)
 
@@ -300,7 +300,7 @@ def _ompl_plan(space, checker, start_pose, goal_pose, config: PlannerConfig, max
         raise PlanningError(
             f"no collision-free path from start {np.round(start_pose[:3], 3).tolist()} to goal "
             f"{np.round(goal_pose[:3], 3).tolist()} found by {name} within {limit} "
-            "(the space may be blocked; a longer time limit helps only if it is not)")
+            f"(the space may be blocked; a longer time limit helps only if it is not){_walls_note(checker)}")
     if config.simplify and space.dim == 6:
         setup.simplifySolution(0.0)  # 0 = OMPL's bounded simplifyMax: deterministic
     path = setup.getSolutionPath()
@@ -313,6 +313,15 @@ def _ompl_plan(space, checker, start_pose, goal_pose, config: PlannerConfig, max
     return _finish(vertices, space, checker, start_pose, goal_pose, config, plan_time, name)
 
 
+def _walls_note(checker: BodyChecker) -> str:
+    """What a failure message adds when the planner's maps hold walls the world does not (`step_walls`)."""
+    if not checker.walled_cells:
+        return ""
+    c = checker.config
+    return (f"; {checker.walled_cells} cells at floor edges over {c.step_height:.2f} m (steps, the rims of gaps "
+            f"wider than {2 * c.stride_slack:.2f} m) are walls to the planner")
+
+
 def _lattice_plan(space, checker, start_pose, goal_pose, config: PlannerConfig) -> Plan:
     from planners.lattice import lattice_path
 
@@ -322,7 +331,7 @@ def _lattice_plan(space, checker, start_pose, goal_pose, config: PlannerConfig) 
         raise PlanningError(
             f"no collision-free path from start {np.round(start_pose[:3], 3).tolist()} to goal "
             f"{np.round(goal_pose[:3], 3).tolist()}: the lattice search (every cell and heading) found none, so "
-            "the body does not fit through (at the map's resolution)")
+            f"the body does not fit through (at the map's resolution){_walls_note(checker)}")
     return _finish(vertices, space, checker, start_pose, goal_pose, config, time.perf_counter() - began, "lattice")
 
 

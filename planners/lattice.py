@@ -17,7 +17,7 @@ import numpy as np
 from scipy import ndimage, sparse
 from scipy.sparse import csgraph
 
-from planners.body_check import BodyChecker
+from planners.body_check import BodyChecker, widest_band
 
 YAW_BINS = 16
 """Headings searched (every 22.5 degrees)."""
@@ -63,19 +63,18 @@ def valid_grid(checker: BodyChecker) -> np.ndarray:
         kernel = _footprint(hx, hy, yaw, res)
         low = ndimage.maximum_filter(floor, footprint=kernel, mode="constant", cval=np.inf) + hz
         high = ndimage.minimum_filter(ceiling, footprint=kernel, mode="constant", cval=-np.inf) - hz
-        if checker.config.check_heights:
+        if checker.config.check_heights:  # each foot's reach from the lowest and highest floor around it
             rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
-            best = np.full(floor.shape, -np.inf)
-            feet = [[_foot_range(floor, rot @ p[:2], res) for p in points]
-                    for points in (checker.stance_points, checker.narrow_stance_points)]
-            for combo in range(2 ** len(checker.stance_points)):
-                f_low, f_high = low.copy(), high.copy()
-                for f in range(len(checker.stance_points)):
-                    g_min, g_max = feet[(combo >> f) & 1][f]
-                    f_low = np.maximum(f_low, np.where(np.isnan(g_max), np.inf, g_max + lo))
-                    f_high = np.minimum(f_high, np.where(np.isnan(g_min), -np.inf, g_min + hi))
-                best = np.maximum(best, f_high - f_low)
-            out[k] = best >= 0.0
+            ranges = [[_foot_range(floor, rot @ p[:2], res) for p in points] for points in checker.stance_choices]
+            g_min = np.stack([np.stack([r[0] for r in choice], -1) for choice in ranges], -1)  # (nx, ny, F, C)
+            g_max = np.stack([np.stack([r[1] for r in choice], -1) for choice in ranges], -1)
+            starts = np.where(np.isnan(g_max), np.inf, g_max + lo)
+            ends = np.where(np.isnan(g_min), -np.inf, g_min + hi)
+            fits = np.flatnonzero(high >= low)  # only where the box fits, in chunks (the band is 272 numbers a cell)
+            for chunk in np.array_split(fits, max(1, len(fits) // 8192)):
+                cell = np.unravel_index(chunk, floor.shape)
+                z_low, z_high = widest_band(low[cell], high[cell], starts[cell], ends[cell])
+                out[k][cell] = z_high >= z_low
         else:
             out[k] = high >= low
     return out

@@ -37,6 +37,6 @@ def make_planned_env(task: str, planner: PlannerConfig = PlannerConfig(), cache_
     if entry.kind != "confined":
         return make(task, config)
     worlds, plans = feasible_worlds(config.num_worlds, config.world_seed, config.difficulties, config.world,
-                                    entry.robot, planner, cache_dir, workers, progress=progress)
+                                    entry.robot, planner, cache_dir, workers, progress=progress, levels=config.levels)
     terrain = Terrain.from_worlds(worlds)
     return ConfinedEnv(config, entry.robot, terrain, tile_paths(terrain, worlds, plans))

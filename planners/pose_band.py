@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from planners.body_check import BodyChecker, rotation_rpy
+from planners.body_check import BodyChecker, rotation_rpy, widest_band
 from planners.box_space import BoxSpace
 
 
@@ -33,8 +33,6 @@ class PoseBands:
         half_z = checker.half_extents[2]
         self._bottom_face = checker.bottom_points[np.isclose(checker.bottom_points[:, 2], -half_z)]
         self._top_face = checker.top_points[np.isclose(checker.top_points[:, 2], half_z)]
-        feet = len(stance)
-        self._choices = (np.arange(2 ** feet)[:, None] >> np.arange(feet)[None, :]) & 1  # (combos, feet)
 
     def band(self, xy_yaw: np.ndarray, roll: np.ndarray, pitch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(z_low, z_high) of the body centre for poses (n, 3) = x, y, yaw at the given tilts (n,)."""
@@ -52,17 +50,11 @@ class PoseBands:
         high = np.min(surface(top, ceiling=True) - top[..., 2], axis=1)
         bad = np.isnan(low) | np.isnan(high)
         low, high = np.where(bad, np.inf, low), np.where(bad, -np.inf, high)
-        if c.config.check_heights:  # each foot on its nominal or its narrower stance point: widest choice
+        if c.config.check_heights:  # each foot at its nominal point or an alternative: the widest band, exactly
             lo, hi = c.height_range
-            ground = np.stack([surface(o) - o[..., 2] for o in (offsets(c.stance_points),
-                                                                  offsets(c.narrow_stance_points))], -1)
-            ground = np.nan_to_num(ground, nan=np.inf)  # (n, feet, 2): off the map, never within reach
-            feet = np.arange(ground.shape[1])
-            choice = ground[:, feet[None, :], self._choices]  # (n, combos, feet)
-            low = np.maximum(low[:, None], np.max(choice + lo, axis=2))
-            high = np.minimum(high[:, None], np.min(choice + hi, axis=2))
-            best = np.argmax(high - low, axis=1)
-            low, high = low[np.arange(len(low)), best], high[np.arange(len(high)), best]
+            ground = np.stack([surface(o) - o[..., 2] for o in map(offsets, c.stance_choices)], -1)
+            ground = np.nan_to_num(ground, nan=np.inf)  # (n, feet, choices): off the map, never within reach
+            low, high = widest_band(low, high, ground + lo, ground + hi)
         return low, high
 
     def floor_tilt(self, xy_yaw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -7,7 +7,8 @@ import math
 
 import numpy as np
 
-from legged.worlds.generator import World, WorldConfig, WorldError, generate_world
+from legged.worlds.generator import World, WorldConfig, WorldError
+from legged.worlds.levels import LevelConfig, make_world
 from legged.worlds.maps import HeightMaps
 
 
@@ -72,9 +73,10 @@ class Terrain(HeightMaps):
 
     @classmethod
     def generate(cls, num_worlds: int, seed: int, difficulties=(0, 1, 2),
-                 config: WorldConfig = WorldConfig()) -> "Terrain":
-        """Generate `num_worlds` worlds, cycling through `difficulties`, and tile them."""
-        worlds = [generate_world(seed * 100_003 + k, difficulties[k % len(difficulties)], config)
+                 config: WorldConfig = WorldConfig(), levels: LevelConfig | None = None) -> "Terrain":
+        """Generate `num_worlds` worlds, cycling through `difficulties`, and tile them: the tunnels of `config`, or
+        with `levels` the level worlds d0-d4 of legged.worlds.levels (`difficulties` are then levels)."""
+        worlds = [make_world(seed * 100_003 + k, difficulties[k % len(difficulties)], config, levels)
                   for k in range(num_worlds)]
         return cls.from_worlds(worlds)
 
