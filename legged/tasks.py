@@ -17,10 +17,12 @@ from legged.envs.rough import RoughConfig, RoughEnv
 from legged.robots import GO1, OP3
 from legged.robots.spec import RobotSpec
 from legged.envs.config import NoiseConfig
+from legged.sensors.heightscan import ScanConfig
 from legged.soccer.config import SoccerSceneConfig
 from legged.soccer.randomize import OP3_RANDOMIZATION
 from legged.soccer.skill_config import GetUpConfig, WalkSkillConfig
 from legged.soccer.task_config import SoccerConfig
+from legged.worlds.levels import LEVELS, LevelConfig
 
 Kind = Literal["locomotion", "confined", "soccer"]
 
@@ -83,6 +85,12 @@ class TaskEntry:
 
 _GO1 = dict(motor_curve=True)
 """What the Go1 tasks' configs set beyond their classes' defaults (runs saved before it existed load without)."""
+_CONFINED = dict(_GO1, speed_command=True, speed_range=(0.3, 1.0), levels=LevelConfig(), difficulties=LEVELS,
+                 scan=ScanConfig(x_range=(-0.3, 0.9), y_range=(-0.4, 0.4), spacing=0.05, ceiling_clip=0.3))
+"""What the confined tasks' configs set beyond that (runs saved before them load without): each episode draws its
+speed limit from 0.3-1 m/s and the command tells the policy the limit in force; the worlds are the levels d0-d4; the
+height scans reach under the hind feet at 5 cm spacing (half the narrowest void) and read every roof over 0.3 m above
+the base, and open sky, alike."""
 _OP3 = dict(randomization=OP3_RANDOMIZATION, noise=NoiseConfig(enabled=True))
 """What the OP3 tasks' configs set beyond their classes' defaults: the randomisation that covers the reference models
 and observation noise (runs saved before them load without)."""
@@ -93,13 +101,13 @@ _DEPLOYED = dict(robot_models=True, bounded_actions=True)
 TASKS: dict[str, TaskEntry] = {e.name: e for e in (
     TaskEntry("go1-flat", FlatEnv, FlatConfig(**_GO1), GO1, "locomotion", **_DEPLOYED),
     TaskEntry("go1-rough", RoughEnv, RoughConfig(**_GO1), GO1, "locomotion", **_DEPLOYED),
-    TaskEntry("confined-waypoints", ConfinedEnv, ConfinedConfig(mode="waypoints", six_dof_command=True, **_GO1), GO1,
-              "confined", **_DEPLOYED),
-    TaskEntry("confined-goal", ConfinedEnv, ConfinedConfig(mode="goal", **_GO1), GO1, "confined", **_DEPLOYED),
-    TaskEntry("confined-velocity", ConfinedEnv, ConfinedConfig(mode="velocity", success_bootstraps=True, **_GO1), GO1,
-              "confined", **_DEPLOYED),
-    TaskEntry("confined-skills", ConfinedEnv, ConfinedConfig(mode="skills", success_bootstraps=True, **_GO1), GO1,
-              "confined", **_DEPLOYED),
+    TaskEntry("confined-waypoints", ConfinedEnv, ConfinedConfig(mode="waypoints", six_dof_command=True, **_CONFINED),
+              GO1, "confined", **_DEPLOYED),
+    TaskEntry("confined-goal", ConfinedEnv, ConfinedConfig(mode="goal", **_CONFINED), GO1, "confined", **_DEPLOYED),
+    TaskEntry("confined-velocity", ConfinedEnv, ConfinedConfig(mode="velocity", success_bootstraps=True, **_CONFINED),
+              GO1, "confined", **_DEPLOYED),
+    TaskEntry("confined-skills", ConfinedEnv, ConfinedConfig(mode="skills", success_bootstraps=True, **_CONFINED),
+              GO1, "confined", **_DEPLOYED),
     TaskEntry("op3-walk", _walk_skill, WalkSkillConfig(**_OP3), OP3, "locomotion", **_DEPLOYED),
     TaskEntry("op3-getup", _getup_skill, GetUpConfig(**_OP3), OP3, "locomotion", **_DEPLOYED),
     TaskEntry("soccer-1v1", _soccer, SoccerConfig(**_OP3), OP3, "soccer", **_DEPLOYED),

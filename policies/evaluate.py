@@ -134,6 +134,9 @@ def summarize(finals: list[dict], confined: bool) -> dict:
         out["collisions_per_success"] = float(np.mean([f["collisions"] for f, s in zip(finals, success) if s])) \
             if success.any() else None
         out["final_distance_m"] = float(np.mean([f["final_distance_m"] for f in finals]))
+        if "overspeed_mps" in finals[0]:  # the speed limit: mean speed and mean excess over the limit, per step
+            out["mean_speed_mps"] = float(np.mean([f["mean_speed_mps"] for f in finals]))
+            out["overspeed_mps"] = float(np.mean([f["overspeed_mps"] for f in finals]))
     return out
 
 

@@ -97,3 +97,18 @@ def export_onnx(policy: Policy, path: str | Path, samples: int = 64, seed: int =
     return {"onnx": str(path), "checkpoint": str(policy.checkpoint), "backend": policy.backend,
             "obs_size": policy.obs_size, "inputs": inputs, "outputs": outputs, "num_actions": policy.num_actions,
             "max_abs_diff": gap, "samples": samples, "action_bound": policy.action_bound, "max_abs_action": largest}
+
+
+def export_run(run_dir: str, checkpoint: str | None = None, out: str | Path | None = None) -> dict:
+    """Export the policy of `run_dir` (its `checkpoint`, default its newest) with `export_onnx` to `out` (default
+    RUN_DIR/policy.onnx); returns the check. A piloted vision student deploys as two networks, it estimates and
+    the pilot steers: the pilot is exported beside it (<out>_pilot.onnx) and its check reported as `pilot`."""
+    from policies.policy_io import load_policy
+
+    policy, config = load_policy(run_dir, checkpoint)
+    out = Path(out or f"{run_dir}/policy.onnx")
+    report = export_onnx(policy, out)
+    if config.pilot:
+        pilot, _ = load_policy(config.pilot)
+        report["pilot"] = dict(export_onnx(pilot, out.with_name(f"{out.stem}_pilot.onnx")), run=config.pilot)
+    return report

@@ -15,7 +15,7 @@ from tqdm import tqdm
 from legged.worlds.scenes import SPEED, read_scene, scene_files
 from planners import PlannerConfig, navigation_maps
 from policies.evaluate import wilson_interval
-from policies.navigate import NavigationError, Unreachable, load_follower, navigate_seeds
+from policies.navigate import NavigationError, Unreachable, check_speed_limit, load_follower, navigate_seeds
 
 
 def _median(values: list) -> float | None:
@@ -55,9 +55,14 @@ def _unplanned(scene, episodes: int, why: str) -> dict:
 
 def bench_navigate(scenes_dir, policy_dir, seeds: int = 5, first_seed: int = 0, robot: str = "project",
                    physics: str = "native", threads: int | None = None, resolution: float = 0.025,
-                   planner: PlannerConfig = PlannerConfig(), speed: float = SPEED, progress: bool = True) -> dict:
+                   planner: PlannerConfig = PlannerConfig(), speed: float = SPEED, progress: bool = True,
+                   max_speed: float | None = None) -> dict:
     """Every scene of `scenes_dir` navigated by the follower `policy_dir` with episode seeds first_seed onward.
-    Scene files and the policy are checked before any navigation starts."""
+    Scene files and the policy are checked before any navigation starts. `max_speed`: the navigations' speed limit,
+    m/s (policies.navigate; default: the run's), which then also replaces `speed`, the limit times to goal are
+    compared at."""
+    check_speed_limit(max_speed)
+    speed = speed if max_speed is None else max_speed
     scenes = [read_scene(path) for path in scene_files(scenes_dir)]
     load_follower(policy_dir, robot, physics)
     rows, pooled = [], []
@@ -68,7 +73,8 @@ def bench_navigate(scenes_dir, policy_dir, seeds: int = 5, first_seed: int = 0, 
             maps = navigation_maps(model, scene.start, scene.goal, resolution)
             reports = navigate_seeds(policy_dir, maps, scene.start, scene.goal,
                                      list(range(first_seed, first_seed + seeds)), physics, threads, planner=planner,
-                                     robot=robot, time_limit_s=scene.time_limit_s, progress=bar.update)
+                                     robot=robot, time_limit_s=scene.time_limit_s, progress=bar.update,
+                                     max_speed=max_speed)
         except (Unreachable, NavigationError) as exc:  # the planner's failure is the benchmark's result
             rows.append(_unplanned(scene, seeds, str(exc)))
             bar.update(seeds)

@@ -18,6 +18,7 @@ import numpy as np
 
 from legged.envs.confined import ConfinedEnv
 from legged.envs.curriculum import level_carry
+from legged.envs.paths import pad_speeds
 from legged.envs.vector import VectorEnv
 from legged.tasks import task_entry
 from legged.worlds.maps import HeightMaps
@@ -69,6 +70,12 @@ def _pose_of(qpos: np.ndarray) -> np.ndarray:
     return np.array([qpos[0], qpos[1], qpos[2], roll, pitch, yaw])
 
 
+def check_speed_limit(max_speed: float | None) -> None:
+    """NavigationError unless `max_speed` is None (the run's limit) or a positive number of m/s."""
+    if max_speed is not None and not 0.0 < max_speed < math.inf:  # NaN fails here too
+        raise NavigationError(f"the speed limit must be a positive number of m/s, got {max_speed!r}")
+
+
 def terrain_of(maps: HeightMaps, start, goal) -> Terrain:
     """A one-world terrain holding `maps` with its start and goal."""
     if isinstance(maps, Terrain):
@@ -97,14 +104,17 @@ def load_follower(run_dir, robot: str = "project", physics: str | None = None):
 
 def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", threads: int | None = None,
              config: NavigateConfig = NavigateConfig(), planner: PlannerConfig = PlannerConfig(), seed: int = 0,
-             on_step=None, robot: str = "project", time_limit_s: float | None = None) -> dict:
+             on_step=None, robot: str = "project", time_limit_s: float | None = None,
+             max_speed: float | None = None) -> dict:
     """Plan from start to goal, follow with the run's policy, replan on straying; the outcome as a dict.
     `on_step(env, state, plan)` is called at the start and after every control step but the last (viewers). Raises NavigationError (the
     policy cannot navigate, or the start or goal is unusable; Unreachable when no path exists) before any
     compilation. `robot`: the robot model the follower walks (legged.robots.models). `time_limit_s`: the
-    navigation's time limit (default: 20 s plus `config.seconds_per_metre` per metre of the first plan)."""
+    navigation's time limit (default: 20 s plus `config.seconds_per_metre` per metre of the first plan).
+    `max_speed`: the speed limit, m/s (default: the run's `env.max_speed`; a follower trained with
+    `env.speed_command` is told it, one trained without runs at its own speed and is only measured against it)."""
     report = navigate_seeds(run_dir, maps, start, goal, [seed], physics, threads, config, planner, on_step, robot,
-                            time_limit_s)[0]
+                            time_limit_s, max_speed=max_speed)[0]
     report.pop("speeds_mps")
     return report
 
@@ -112,10 +122,11 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
 def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], physics: str = "native",
                    threads: int | None = None, config: NavigateConfig = NavigateConfig(),
                    planner: PlannerConfig = PlannerConfig(), on_step=None, robot: str = "project",
-                   time_limit_s: float | None = None, progress=None) -> list[dict]:
+                   time_limit_s: float | None = None, progress=None, max_speed: float | None = None) -> list[dict]:
     """`navigate` once per episode seed, planned and compiled once (the same plan, another episode each);
     `progress()` is called after each. Each report also holds `speeds_mps`, the body's horizontal speed at every
     control step."""
+    check_speed_limit(max_speed)
     policy, run_config = load_follower(run_dir, robot, physics)
     spec = task_entry(run_config.task).robot
     start, goal = np.asarray(start, float), np.asarray(goal, float)
@@ -126,10 +137,11 @@ def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], phy
             raise Unreachable(f"the goal cannot be reached: {exc}") from None
         raise NavigationError(str(exc)) from None  # a start or goal where the robot does not fit
     time_limit = time_limit_s if time_limit_s is not None else 20.0 + config.seconds_per_metre * first_plan.length_m
+    limit = run_config.env.max_speed if max_speed is None else max_speed  # one limit, not a training draw
     env_config = dataclasses.replace(run_config.env, num_worlds=1, curriculum=False, spawn_yaw=0.0,
-                                     episode_seconds=time_limit)
+                                     episode_seconds=time_limit, max_speed=limit, speed_range=None)
     env = ConfinedEnv(env_config, spec, terrain_of(maps, start, goal),
-                      [first_plan.waypoints], path_capacity=PATH_CAPACITY)
+                      [first_plan.waypoints], path_capacity=PATH_CAPACITY, speeds=[plan_speeds(first_plan)])
     try:
         check_policy(policy, env)
     except RunDirError as exc:
@@ -139,7 +151,8 @@ def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], phy
     for seed in seeds:
         report = _follow(vector, env, policy, maps, goal, spec, first_plan, seed, config, planner, on_step)
         reports.append(dict(report, physics=physics, time_limit_s=round(time_limit, 2), policy=str(policy.checkpoint),
-                            robot=run_config.env.robot_model))
+                            robot=run_config.env.robot_model, speed_limit_mps=limit,
+                            speed_commanded=env_config.speed_command))
         if progress is not None:
             progress()
     return reports
@@ -180,7 +193,7 @@ def _follow(vector, env, policy, maps, goal, spec, first_plan, seed, config, pla
                 last_progress_step = steps
             else:
                 replans += 1
-                batch = _hand_over(batch, plan.waypoints)
+                batch = _hand_over(batch, plan.waypoints, plan_speeds(plan), env.config.max_speed)
                 last_waypoint, last_progress_step = 1, steps
         if on_step is not None:
             on_step(env, batch.state, plan)
@@ -191,19 +204,31 @@ def _follow(vector, env, policy, maps, goal, spec, first_plan, seed, config, pla
             "failed_replans": failed_replans, "path_length_m": round(first_plan.length_m, 4),
             "walked_m": round(walked, 4), "mean_speed_mps": round(float(np.mean(speeds)), 4) if speeds else 0.0,
             "p95_speed_mps": round(float(np.percentile(speeds, 95)), 4) if speeds else 0.0,
+            "overspeed_mps": round(final["overspeed_mps"], 4),
             "final_distance_m": round(final["final_distance_m"], 4),
             "planner": first_plan.planner, "plan_time_s": round(first_plan.plan_time_s, 4),
             "speeds_mps": np.round(np.asarray(speeds, float), 3)}
 
 
-def _hand_over(batch, waypoints: np.ndarray):
-    """The batch with environment 0 following `waypoints` from its second pose on."""
+def plan_speeds(plan) -> np.ndarray | None:
+    """A plan's speed limit per waypoint (m/s, NaN: none of its own), where its planner gives them (`speeds`);
+    None: the navigation's limit everywhere."""
+    speeds = getattr(plan, "speeds", None)
+    return None if speeds is None else np.asarray(speeds, float)
+
+
+def _hand_over(batch, waypoints: np.ndarray, speeds: np.ndarray | None = None, max_speed: float = 1.0):
+    """The batch with environment 0 following `waypoints` from its second pose on, with their speed limits
+    (`speeds`, one per waypoint; None or NaN: `max_speed`)."""
     info = dict(batch.state.info)
     capacity = info["path"].shape[1]
     if len(waypoints) > capacity:
-        waypoints = np.concatenate([waypoints[:capacity - 1], waypoints[-1:]])
+        keep = np.r_[:capacity - 1, len(waypoints) - 1]
+        waypoints, speeds = waypoints[keep], None if speeds is None else np.asarray(speeds)[keep]
     padded = np.concatenate([waypoints, np.repeat(waypoints[-1:], capacity - len(waypoints), 0)]).astype(np.float32)
     info["path"] = info["path"].at[0].set(jnp.asarray(padded))
     info["path_len"] = info["path_len"].at[0].set(len(waypoints))
+    limits = pad_speeds([speeds], [len(waypoints)], capacity, max_speed)[0]
+    info["speeds"] = info["speeds"].at[0].set(jnp.asarray(limits))
     info["waypoint"] = info["waypoint"].at[0].set(1)
     return dataclasses.replace(batch, state=batch.state.replace(info=info))

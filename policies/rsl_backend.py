@@ -296,6 +296,6 @@ def save_checkpoint(run: RunDir, alg, iteration: int, step: int, obs_sizes: dict
     if opponent_pool is not None:
         payload["opponent_pool"] = _as_tensors(opponent_pool)
     if curriculum_levels is not None:
-        payload["curriculum_levels"] = torch.from_numpy(curriculum_levels)
+        payload["curriculum_levels"] = torch.from_numpy(np.array(curriculum_levels))  # a writable copy
     torch.save(payload, buffer)
     return run.write_checkpoint(step, "pt", buffer.getvalue())

@@ -127,6 +127,15 @@ CASES = {
                                     "-1.5,0,0.27", "--goal", "9,0,0.27"], "off the scene"),
     "navigate: scene without start": (["navigate", "--policy", FOLLOWER, "--scene", "{d}/tunnel.xml"],
                                       "needs --start"),
+    "navigate: zero speed limit": (["navigate", "--max-speed", "0"], "greater than 0"),
+    "navigate: negative speed limit": (["navigate", "--max-speed", "-1"], "greater than 0"),
+    "navigate: absurd speed limit": (["navigate", "--max-speed", "1e9"], "at most 10"),
+    "bench navigate: zero speed limit": (["bench", "navigate", "--scenes", "{d}", "--max-speed", "0"],
+                                         "greater than 0"),
+    "train: negative speed limit": (["train", "confined-waypoints", "--set", "env.max_speed=-1", "--run-dir",
+                                     "{d}/t11"], "max_speed"),
+    "train: speed range upside down": (["train", "confined-waypoints", "--set", "env.speed_range=[0.8, 0.3]",
+                                        "--run-dir", "{d}/t12"], "speed_range"),
     "train: brax with the curriculum": (["train", "confined-waypoints", "--backend", "brax", "--run-dir", "{d}/t7"],
                                         "env.curriculum=false"),
     "train: warm start from nothing": (["train", "confined-waypoints", "--init-from", "{d}/none", "--run-dir",
@@ -178,7 +187,7 @@ def test_bad_input_is_one_line_and_exit_2(name, files, capsys):
 
 
 def test_nothing_half_written(files):
-    for name in ("t1", "t2", "t3", "t4", "t5", "t6", "t7", "t8", "t9", "t10", "w"):
+    for name in ("t1", "t2", "t3", "t4", "t5", "t6", "t7", "t8", "t9", "t10", "t11", "t12", "w"):
         assert not (files / name).exists(), name
     assert not (files / "p.onnx").exists()
 

@@ -10,6 +10,7 @@ One environment class, four tasks that differ only in what the policy is told an
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Literal, Sequence
 
 import jax
@@ -20,12 +21,13 @@ from legged.envs.base import LeggedEnv
 from legged.envs.config import GO1_RANDOMIZATION, EnvConfig, NoiseConfig, PenaltyScales, RandomizationConfig
 from legged.envs.curriculum import next_level, pick_tile
 from legged.envs.math import roll_pitch, yaw_rotate
-from legged.envs.paths import pad_paths, straight_path
+from legged.envs.paths import pad_paths, pad_speeds, straight_path
 from legged.envs.rewards import tracking, wrap_angle
 from legged.robots import GO1
 from legged.robots.spec import RobotSpec
 from legged.sensors.heightscan import ScanConfig, scan_points_world
 from legged.worlds.generator import WorldConfig
+from legged.worlds.levels import LevelConfig
 from legged.worlds.mjcf import SceneOptions
 from legged.worlds.terrain import Terrain
 
@@ -41,7 +43,12 @@ class ConfinedRewards:
     waypoint_reached: float = 1.0
     """Each time the current waypoint is reached (waypoints, velocity, skills modes)."""
     exploration: float = 1.0
-    """Times the base velocity projected on the direction to the current target (m/s)."""
+    """Times the base velocity projected on the direction to the current target (m/s), capped at the speed limit in
+    force (`ConfinedConfig.max_speed`): speed beyond the limit earns nothing."""
+    overspeed: float = -1.0
+    """Times the horizontal base speed beyond the speed limit in force (m/s, linear): with `exploration` at 1 a step's
+    reward peaks at the limit and falls as steeply above it as it rose below, so running at 1.5x the limit pays half
+    the limit's reward per step and a third per metre, and at 2x nothing (before the penalties)."""
     stalling: float = -1.0
     """Per step while slow and still far from the current target."""
     tracking_lin_vel: float = 1.0
@@ -65,7 +72,11 @@ class ConfinedConfig(EnvConfig):
     difficulties: tuple[int, ...] = (0, 1, 2)
     """Difficulty levels cycled over the worlds."""
     world: WorldConfig = WorldConfig()
-    """World generator settings."""
+    """Tunnel generator settings (the worlds when `levels` is None)."""
+    levels: LevelConfig | None = None
+    """The level worlds d0-d4 (legged.worlds.levels: tunnels; corridors of any width under any roof or open sky;
+    bars, side blocks, pillars; steps, ramps, turns; voids), `difficulties` then naming levels (None: the tunnels of
+    `world` only, as runs saved before the levels existed)."""
     scan: ScanConfig = ScanConfig()
     """Floor and ceiling height-scan grid."""
     waypoint_spacing: float = 0.5
@@ -79,7 +90,17 @@ class ConfinedConfig(EnvConfig):
     stall_distance: float = 0.3
     """... while farther than this from the target (m), a step counts as stalling."""
     command_speed: float = 0.5
-    """Commanded speed toward the waypoint in velocity and skills modes, m/s."""
+    """Commanded speed toward the waypoint in velocity and skills modes, m/s (lowered to the speed limit in force)."""
+    max_speed: float = 1.0
+    """Speed limit, m/s: exploration pays no horizontal speed beyond it and `rewards.overspeed` charges for the excess.
+    A planned path may lower it at some waypoints (ConfinedEnv's `speeds`); the limit in force is the lower of the
+    episode's and the current waypoint's (goal mode: the episode's)."""
+    speed_command: bool = False
+    """The command ends with the speed limit in force (`speed_limit`), so that a policy can obey a limit lower than
+    the one it trained at. Off for runs saved before it existed; on for the confined tasks (legged.tasks)."""
+    speed_range: tuple[float, float] | None = None
+    """Each episode draws its speed limit uniformly from this range, m/s (capped at `max_speed`), so that training
+    sees many limits; None: every episode's limit is `max_speed`."""
     six_dof_command: bool = False
     """Waypoints mode: add target height, roll, pitch and relative yaw to the 2-D command."""
     spawn_yaw: float = 0.3
@@ -104,18 +125,33 @@ class ConfinedConfig(EnvConfig):
     noise: NoiseConfig = NoiseConfig(enabled=True)
     """Observation noise on `state` (on)."""
 
+    def __post_init__(self):
+        if not 0.0 < self.max_speed < math.inf:  # NaN fails here too
+            raise ValueError(f"max_speed (the speed limit) must be a positive number of m/s, got {self.max_speed!r}")
+        if self.speed_range is not None:
+            r = tuple(self.speed_range)
+            if len(r) != 2 or not 0.0 < r[0] <= r[1] < math.inf:
+                raise ValueError(f"speed_range must be two speeds LOW, HIGH in m/s with 0 < LOW <= HIGH, got "
+                                 f"{self.speed_range!r}")
+
 
 class ConfinedEnv(LeggedEnv):
     """Go1 in tiled confined worlds, following waypoints (or a goal, or commands) to the goal."""
 
     def __init__(self, config: ConfinedConfig = ConfinedConfig(), robot: RobotSpec = GO1,
-                 terrain: Terrain | None = None, paths: Sequence[np.ndarray] | None = None, path_capacity: int = 0):
-        terrain = terrain or Terrain.generate(config.num_worlds, config.world_seed, config.difficulties, config.world)
+                 terrain: Terrain | None = None, paths: Sequence[np.ndarray] | None = None, path_capacity: int = 0,
+                 speeds: Sequence[np.ndarray | None] | None = None):
+        """`paths`: one (n, 6) body-pose path per world (default: straight lines); `path_capacity`: room for longer
+        paths handed in later; `speeds`: per path, a speed limit per waypoint (m/s; None or NaN: `max_speed`)."""
+        terrain = terrain or Terrain.generate(config.num_worlds, config.world_seed, config.difficulties, config.world,
+                                              config.levels)
         super().__init__(robot, terrain, SceneOptions(), config)
         if paths is None:
             paths = [straight_path(s, g, config.waypoint_spacing) for s, g in zip(terrain.starts, terrain.goals)]
         path_array, lengths = pad_paths(list(paths), terrain, path_capacity)
         self._paths, self._path_len = jnp.asarray(path_array), jnp.asarray(lengths)
+        speeds = [None] * len(lengths) if speeds is None else list(speeds)
+        self._speeds = jnp.asarray(pad_speeds(speeds, lengths, path_array.shape[1], config.max_speed))
         self._starts = jnp.asarray(terrain.starts, jnp.float32)
         self._goals = jnp.asarray(terrain.goals, jnp.float32)
         self._scan_points = jnp.asarray(config.scan.points(), jnp.float32)
@@ -131,15 +167,25 @@ class ConfinedEnv(LeggedEnv):
         mode = self.config.mode
         if mode in ("waypoints", "goal"):
             six = mode == "waypoints" and self.config.six_dof_command
-            return ("dx", "dy") + (("dz", "roll", "pitch", "dyaw") if six else ())
-        return ("vx", "vy", "yaw_rate") + (("height", "roll", "pitch") if mode == "skills" else ())
+            names = ("dx", "dy") + (("dz", "roll", "pitch", "dyaw") if six else ())
+        else:
+            names = ("vx", "vy", "yaw_rate") + (("height", "roll", "pitch") if mode == "skills" else ())
+        return names + (("speed_limit",) if self.config.speed_command else ())
 
     # ----------------------------------------------------------------- read-outs (dashboard, analysis)
     def path_of(self, info) -> tuple[jax.Array, jax.Array]:
         """The episode's waypoints (max_waypoints, 6) and how many of them are valid. They live in `info`
         ('path', 'path_len'; the planned path of the episode's world at its start), so a navigator may hand
-        an episode a new plan between steps (then also setting info['waypoint'])."""
+        an episode a new plan between steps (then also setting info['waypoint'] and the plan's per-waypoint speed
+        limits, info['speeds'], laid out by legged.envs.paths.pad_speeds)."""
         return info["path"], info["path_len"]
+
+    def speed_limit(self, info) -> jax.Array:
+        """The speed limit in force, m/s: the episode's (info['speed_limit']: `max_speed`, or drawn from
+        `speed_range`), lowered to the current waypoint's own limit (info['speeds']) except in goal mode."""
+        if self.config.mode == "goal":
+            return info["speed_limit"]
+        return jnp.minimum(info["speed_limit"], info["speeds"][info["waypoint"]])
 
     def scan_world_points(self, data) -> jax.Array:
         """World positions of the floor then the ceiling height-scan points, shape (2, n, 3)."""
@@ -164,8 +210,13 @@ class ConfinedEnv(LeggedEnv):
         start = self._starts[tile]
         z = self.floor_height(start[:2]) + self.robot.standing_height + 0.02
         yaw = jax.random.uniform(k_yaw, minval=-self.config.spawn_yaw, maxval=self.config.spawn_yaw)
+        limit = jnp.float32(self.config.max_speed)
+        if self.config.speed_range is not None:  # a key of its own: the tile and yaw draws stay those of older runs
+            low, high = self.config.speed_range
+            limit = jnp.minimum(jax.random.uniform(jax.random.fold_in(rng, 1), minval=low, maxval=high), limit)
         info = dict(tile=tile, level=level, waypoint=jnp.int32(1), goal=self._goals[tile], succeeded=jnp.bool_(False),
-                    path=self._paths[tile], path_len=self._path_len[tile])
+                    path=self._paths[tile], path_len=self._path_len[tile], speeds=self._speeds[tile],
+                    speed_limit=limit, speed_sum=jnp.float32(0.0), overspeed_sum=jnp.float32(0.0))
         return jnp.array([start[0], start[1], z]), yaw, info
 
     def _target(self, info) -> jax.Array:
@@ -179,11 +230,19 @@ class ConfinedEnv(LeggedEnv):
         base, yaw = data.xpos[self._trunk], self.base_yaw(data)
         rel = yaw_rotate(yaw, self._target(info)[:2] - base[:2])
         dist = jnp.linalg.norm(rel)
-        v = self.config.command_speed * rel / jnp.maximum(dist, 1e-6) * jnp.minimum(dist / 0.3, 1.0)
+        speed = jnp.minimum(self.config.command_speed, self.speed_limit(info))
+        v = speed * rel / jnp.maximum(dist, 1e-6) * jnp.minimum(dist / 0.3, 1.0)
         yaw_rate = jnp.clip(2.0 * jnp.arctan2(rel[1], rel[0]), -1.0, 1.0) * (dist > 0.1)
         return jnp.array([v[0], v[1], yaw_rate])
 
     def _command(self, data, info):
+        cmd = self._task_command(data, info)
+        if self.config.speed_command:
+            cmd = jnp.concatenate([cmd, self.speed_limit(info)[None]])
+        return cmd
+
+    def _task_command(self, data, info):
+        """The command without the speed limit: the target (waypoints, goal) or the velocity command."""
         mode, target = self.config.mode, self._target(info)
         base, yaw = data.xpos[self._trunk], self.base_yaw(data)
         rel = yaw_rotate(yaw, target[:2] - base[:2])
@@ -201,9 +260,10 @@ class ConfinedEnv(LeggedEnv):
     def _exteroception(self, data, info):
         base, yaw = data.xpos[self._trunk], self.base_yaw(data)
         xy = scan_points_world(base, yaw, self._scan_points)
-        clip = self.config.scan.clip
+        scan = self.config.scan
+        clip, top = scan.clip, scan.clip if scan.ceiling_clip is None else scan.ceiling_clip
         floor = jnp.clip(self.floor_height(xy) - base[2], -clip, clip)
-        ceiling = jnp.clip(self.ceiling_height(xy) - base[2], -clip, clip)
+        ceiling = jnp.clip(self.ceiling_height(xy) - base[2], -clip, top)
         scans = jnp.concatenate([ceiling, floor])
         return scans, jnp.full_like(scans, self.config.noise.height_scan)
 
@@ -226,13 +286,17 @@ class ConfinedEnv(LeggedEnv):
         last = info["waypoint"] >= info["path_len"] - 1
         reached = (dist < cfg.waypoint_radius) & ~last & (cfg.mode != "goal")
         speed = jnp.linalg.norm(vel[:2])
+        limit = self.speed_limit(info)
+        overspeed = jnp.maximum(speed - limit, 0.0)
         terms = {
             "goal_reached": w.goal_reached * success,
             "waypoint_reached": w.waypoint_reached * reached,
             "stalling": w.stalling * ((speed < cfg.stall_speed) & (dist > cfg.stall_distance)),
+            "overspeed": w.overspeed * overspeed,
         }
         if cfg.mode in ("waypoints", "goal"):
-            terms["exploration"] = w.exploration * jnp.dot(vel[:2], to_target / jnp.maximum(dist, 1e-6))
+            toward = jnp.dot(vel[:2], to_target / jnp.maximum(dist, 1e-6))
+            terms["exploration"] = w.exploration * jnp.minimum(toward, limit)
         else:
             cmd = self._velocity_command(data, info)
             yaw = self.base_yaw(data)
@@ -248,6 +312,8 @@ class ConfinedEnv(LeggedEnv):
                 terms["tracking_pose"] = w.tracking_pose * tracking(err, 0.02)
         info["waypoint"] = jnp.where(reached, info["waypoint"] + 1, info["waypoint"])
         info["succeeded"] = success
+        info["speed_sum"] = info["speed_sum"] + speed
+        info["overspeed_sum"] = info["overspeed_sum"] + overspeed
         metrics = {
             "curriculum_level": info["level"].astype(jnp.float32),
             "path_progress": info["waypoint"] / info["path_len"],
@@ -255,5 +321,9 @@ class ConfinedEnv(LeggedEnv):
             "time_to_goal_s": jnp.where(success, info["step"] * self.dt, 0.0),
             "final_distance_m": goal_dist,
             "waypoint_index": info["waypoint"].astype(jnp.float32),
+            "speed": speed,
+            "speed_limit": limit,
+            "mean_speed_mps": info["speed_sum"] / info["step"],
+            "overspeed_mps": info["overspeed_sum"] / info["step"],
         }
         return terms, success, metrics, info

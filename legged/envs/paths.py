@@ -32,3 +32,24 @@ def pad_paths(paths: list[np.ndarray], terrain: Terrain, capacity: int = 0) -> t
         out[k, :len(p)] = p
         out[k, len(p):] = p[-1]
     return out, np.array([len(p) for p in paths], np.int32)
+
+
+def pad_speeds(speeds: list[np.ndarray | None], lengths, capacity: int, default: float) -> np.ndarray:
+    """Per-waypoint speed limits (m/s) laid out like `pad_paths`' paths: (n_paths, capacity), one row per path of
+    `lengths[k]` waypoints; None or NaN (no limit of its own) becomes `default`, and a row is padded with its last
+    value. Each given array must have one limit per waypoint, each positive (or NaN)."""
+    if len(speeds) != len(lengths):
+        raise ValueError(f"got {len(speeds)} speed-limit arrays for {len(lengths)} waypoint paths")
+    out = np.full((len(speeds), capacity), default, np.float32)
+    for k, (s, n) in enumerate(zip(speeds, lengths)):
+        if s is None:
+            continue
+        s = np.asarray(s, np.float64)
+        if s.shape != (n,):
+            raise ValueError(f"speed limits of path {k} must be one per waypoint, shape ({n},); got {s.shape}")
+        if not np.all(np.isnan(s) | (s > 0)):
+            raise ValueError(f"speed limits of path {k} must be positive m/s (NaN: none of its own); got {s}")
+        s = np.where(np.isnan(s), default, s)
+        out[k, :n] = s
+        out[k, n:] = s[-1]
+    return out

@@ -26,6 +26,9 @@ class ScanConfig:
     """Distance between scan points."""
     clip: float = 0.5
     """Scans are heights relative to the base, clipped to [-clip, clip]."""
+    ceiling_clip: float | None = None
+    """When set, the ceiling scan is clipped to [-clip, ceiling_clip] instead: a roof higher than this above the
+    base constrains no body pose, so roofs at any height beyond it and open sky read the same (None: `clip`)."""
 
     def points(self) -> np.ndarray:
         """Scan points as an (n, 2) array, rows along x then columns along y."""

@@ -11,6 +11,7 @@ class Parser(argparse.ArgumentParser):
     dump; `legged <command> --help` shows it)."""
 
     def error(self, message: str):
+        """Print `message` as one line and exit with code 2."""
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
@@ -110,6 +111,14 @@ def add_robot_option(parser) -> None:
 def add_physics_options(parser, default: str = "mjx") -> None:
     """--physics and --threads."""
     parser.add_argument("--physics", choices=["mjx", "native"], default=default,
-                        help="physics engine: mjx (JAX; for accelerators) or native (MuJoCo's C engine; fastest on a CPU)")
+                        help="physics engine: mjx (JAX; for accelerators) or native (MuJoCo's C engine; fastest on "
+                             "a CPU)")
     parser.add_argument("--threads", type=THREADS, default=0, metavar="N",
                         help="CPU threads of native physics and torch (default: every core)")
+
+
+def add_server_options(parser, port: int = 8080) -> None:
+    """--host and --port of the dashboard's server."""
+    parser.add_argument("--host", default="127.0.0.1",
+                        help="address to bind (default 127.0.0.1, this machine only; 0.0.0.0 exposes it)")
+    parser.add_argument("--port", type=bounded(int, 0, 65535), default=port, help="port to bind (0: any free port)")

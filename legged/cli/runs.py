@@ -7,6 +7,7 @@ import json
 
 
 def cmd_convert(args) -> int:
+    """`legged convert-checkpoints`: a run's pickled checkpoints as data-only files."""
     from policies.convert import convert_run
 
     report = convert_run(args.run_dir, args.trust_pickles)
@@ -16,6 +17,7 @@ def cmd_convert(args) -> int:
 
 
 def cmd_average(args) -> int:
+    """`legged average`: a new run whose weights are the mean of checkpoints."""
     from policies.average import average_checkpoints
 
     report = average_checkpoints(args.source, args.out, args.weights)
@@ -26,6 +28,7 @@ def cmd_average(args) -> int:
 
 
 def _weights(text: str) -> list[float]:
+    """Parser of comma-separated checkpoint weights (for argparse `type=`)."""
     try:
         return [float(w) for w in text.split(",") if w]
     except ValueError:

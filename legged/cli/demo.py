@@ -6,8 +6,15 @@ from __future__ import annotations
 import json
 import time
 
-from legged.robots import GO1
-from legged.worlds import generate_world, write_world
+from legged.cli.args import SEED, add_server_options, bounded, choices
+from legged.cli.nav import shipped_policy
+
+
+def cmd_demo(args) -> int:
+    """`legged demo`: world, plan and navigation, printed as they happen; 0 if Go1 reached the goal."""
+    view = {"host": args.host, "port": args.port} if args.view else None
+    return run_demo(args.out, args.seed, args.difficulty, shipped_policy(args.policy), view=view,
+                    physics=args.physics)
 
 
 def run_demo(out: str, seed: int, difficulty: int, policy_dir: str, view: dict | None = None,
@@ -15,6 +22,8 @@ def run_demo(out: str, seed: int, difficulty: int, policy_dir: str, view: dict |
     """Write a world, plan through it and navigate it with the follower of `policy_dir` on each of
     `physics`; 0 if Go1 reached the goal on every engine. With `view` ({'host', 'port'}) the dashboard is
     served afterwards on the demo's world, rolling out the follower."""
+    from legged.robots import GO1
+    from legged.worlds import generate_world, write_world
     from planners import HeightMaps, PlannerConfig, plan_path
     from policies.navigate import load_follower, navigate
 
@@ -57,6 +66,7 @@ def _serve(world, plan, policy_dir: str, seed: int, view: dict, physics: str) ->
     import dataclasses
 
     from legged.envs.confined import ConfinedEnv
+    from legged.robots import GO1
     from legged.worlds import Terrain
     from policies.navigate import load_follower
     from web.app import Dashboard, DashboardConfig
@@ -71,3 +81,18 @@ def _serve(world, plan, policy_dir: str, seed: int, view: dict, physics: str) ->
                                           steps=env.config.episode_steps), source=source)
     print(f"[demo] dashboard at {dashboard.start()} (the first rollout compiles first; Ctrl-C stops)", flush=True)
     dashboard.wait()
+
+
+def add_demo_command(sub) -> None:
+    """Register `demo`."""
+    d = sub.add_parser("demo", help="generate a tunnel, plan through it, and watch the shipped follower walk Go1 "
+                                    "to the goal")
+    d.add_argument("--out", default="legged-demo", help="where to write the world files")
+    d.add_argument("--seed", type=SEED, default=0)
+    d.add_argument("--difficulty", type=bounded(int, 0, 20), default=1)
+    d.add_argument("--policy", default=None, help="a waypoint-follower run (default: the shipped follower)")
+    d.add_argument("--physics", type=choices("mjx", "native"), default=["native"],
+                   help="comma-separated physics engines to navigate in (default native; mjx,native runs both)")
+    d.add_argument("--view", action="store_true", help="afterwards, serve the dashboard on the demo's world")
+    add_server_options(d)
+    d.set_defaults(fn=cmd_demo)

@@ -1,11 +1,12 @@
-"""The command line's benchmarks: `legged bench env|soak|soccer|encoder` (and `bench plan`, from cli_nav)."""
+"""The command line's benchmarks: `legged bench env|soak|soccer|encoder` (and `bench plan` and `bench navigate`,
+from legged.cli.nav)."""
 
 from __future__ import annotations
 
 import sys
 
-from legged.cli_args import SEED, THREADS, bounded, choices, ints, task_names
-from legged.cli_nav import _print_records, add_bench_plan
+from legged.cli.args import SEED, THREADS, bounded, choices, ints, task_names
+from legged.cli.nav import _print_records, add_bench_plan
 
 
 def _each_line(line):
@@ -14,6 +15,7 @@ def _each_line(line):
 
 
 def cmd_bench(args) -> int:
+    """`legged bench env`: environment steps per second, as JSON or a table."""
     from legged.bench import attach_peer, bench_env, bench_peer, print_table
     from legged.tasks import default_config
 
@@ -31,6 +33,7 @@ def cmd_bench(args) -> int:
 
 
 def cmd_bench_soak(args) -> int:
+    """`legged bench soak`: random and extreme actions; non-finite values and divergences."""
     from legged.bench import soak
 
     progress = None if args.quiet else (lambda msg: print(f"[soak] {msg}", file=sys.stderr, flush=True))
@@ -42,6 +45,7 @@ def cmd_bench_soak(args) -> int:
 
 
 def cmd_bench_encoder(args) -> int:
+    """`legged bench encoder`: a history encoder's forward and backward seconds."""
     import torch
 
     from policies.bench_encoder import bench_encoders
@@ -51,10 +55,12 @@ def cmd_bench_encoder(args) -> int:
     records = bench_encoders(args.steps, args.batch)
     return _print_records(records, args.json, _each_line(
         lambda r: f"H={r['history_steps']:4d}  encoder {r['encoder_s']:.3f} s  conv1d {r['conv1d_s']:.3f} s "
-                  f"({r['conv1d_over_unfold']:.2f}x)  head {r['head_s']:.3f} s  encoder/head {r['encoder_over_head']:.1f}x"))
+                  f"({r['conv1d_over_unfold']:.2f}x)  head {r['head_s']:.3f} s  "
+                  f"encoder/head {r['encoder_over_head']:.1f}x"))
 
 
 def cmd_bench_soccer(args) -> int:
+    """`legged bench soccer`: soccer env steps per second beside the peers."""
     from legged.soccer.bench import bench_soccer, print_soccer_table
 
     if not set(args.team_sizes) <= {1, 2}:
@@ -110,7 +116,8 @@ def add_bench_commands(sub) -> None:
     bs.add_argument("--batch", type=ints(1, 65536), default=[1, 16, 64], help="comma-separated batch sizes")
     bs.add_argument("--seconds", type=bounded(float, 0.0, 3600.0), default=3.0, help="timed seconds per measurement")
     bs.add_argument("--no-peer", action="store_true", help="skip dm_control's soccer")
-    bs.add_argument("--peer-steps", type=bounded(int, 1, 100000), default=20, help="control steps timed per dm_control env")
+    bs.add_argument("--peer-steps", type=bounded(int, 1, 100000), default=20,
+                    help="control steps timed per dm_control env")
     bs.add_argument("--physics", type=choices("mjx", "native"), default=["mjx", "native"],
                     help="comma-separated physics engines to measure")
     bs.add_argument("--threads", type=THREADS, default=0, metavar="N",

@@ -1,4 +1,5 @@
-"""The `legged` command line: worlds, planning, benchmarks and the demo."""
+"""The `legged` command's parser and dispatch, and the commands without another group: train, distill, eval,
+plot, table, export, camera, tasks and view."""
 
 from __future__ import annotations
 
@@ -6,15 +7,17 @@ import argparse
 import json
 import sys
 
-from legged.cli_bench import add_bench_commands
-from legged.cli_nav import add_navigation_commands
-from legged.cli_runs import add_run_commands
-from legged.cli_soccer import add_soccer_commands
-from legged.cli_args import (SEED, Parser, add_physics_options, add_robot_option, bounded, choices, ints,
-                             join_negative_coordinates)
+from legged.cli.args import (SEED, Parser, add_physics_options, add_robot_option, add_server_options, bounded,
+                             ints, join_negative_coordinates)
+from legged.cli.bench import add_bench_commands
+from legged.cli.demo import add_demo_command
+from legged.cli.nav import add_navigation_commands
+from legged.cli.runs import add_run_commands
+from legged.cli.soccer import add_soccer_commands
 
 
 def cmd_train(args) -> int:
+    """`legged train`: start a run, or continue one with --resume."""
     from policies.training import resume_run, start_run
 
     if args.resume:
@@ -33,6 +36,7 @@ def cmd_train(args) -> int:
 
 
 def cmd_distill(args) -> int:
+    """`legged distill`: distil a teacher run into a student run."""
     from policies.distill import start_distill
 
     record = start_distill(args.teacher_run, args.method, args.run_dir, timesteps=args.timesteps,
@@ -43,161 +47,29 @@ def cmd_distill(args) -> int:
 
 
 def cmd_eval(args) -> int:
-    import dataclasses
+    """`legged eval`: the run's policy on held-out worlds (policies.eval_report), printed as JSON."""
+    from policies.eval_report import evaluation_report
 
-    from legged.tasks import task_entry
-    from policies.evaluate import ood_config, on_robot, robot_ratios
-    from policies.policy_io import load_policy
-    from policies.run_dir import RunDir
-
-    config = RunDir(args.run_dir).load_config()
-    confined = task_entry(config.task).kind == "confined"
-    if not confined and (args.difficulty is not None or args.world_seed is not None):
-        raise ValueError(f"--difficulty and --world-seed apply to confined tasks; {config.task} has no worlds")
-    if args.ood:
-        ood_config(config.env)  # fails now for tasks without dynamics randomisation
-        if args.nominal:
-            raise ValueError("--ood draws dynamics out of the training distribution; --nominal draws none: choose one")
-    soccer = task_entry(config.task).kind == "soccer"
-    if (args.opponent or args.teammate) and not soccer:
-        raise ValueError(f"--opponent (or --teammate) applies to soccer tasks; {config.task} has no opponents")
-    if (args.pilot or args.oracle or args.tracker) and not soccer:
-        raise ValueError(f"--pilot, --oracle and --tracker apply to soccer vision students; {config.task} is not "
-                         f"soccer")
-    if args.pilot == "teacher" and not config.distill.teacher:
-        raise ValueError(f"--pilot teacher: {args.run_dir} was not distilled from a teacher; name a soccer run")
-    if args.compare_teacher and (not soccer or config.drill or not config.distill.teacher):
-        raise ValueError(f"--compare-teacher plays a distilled soccer student's teacher in the same games; "
-                         f"{args.run_dir} is not a soccer student distilled from a teacher (task {config.task}"
-                         f"{', drill ' + config.drill if config.drill else ''})")
-    if args.compare_pilot and (not soccer or config.drill or not (args.pilot or config.pilot) or args.pilot == "none"):
-        raise ValueError(f"--compare-pilot plays a piloted vision student's pilot, at the truth, in the same games; "
-                         f"{args.run_dir} has no pilot (give one with --pilot RUN)")
-    if config.drill and (args.opponent or args.teammate):
-        raise ValueError(f"{args.run_dir} trained on the {config.drill} drill, where nobody else plays: its eval "
-                         f"plays the drill, without --opponent or --teammate (or use `legged drill {config.drill} "
-                         f"--player {args.run_dir}`)")
-    if (args.compare_teacher or args.compare_pilot) and (args.compare_robots or args.robot != "project"):
-        raise ValueError("--compare-teacher and --compare-pilot play on the project's robot model; run them without "
-                         "--robot and --compare-robots")
-    if args.compare_robots and (args.robot != "project" or len(set(args.compare_robots)) < len(args.compare_robots)):
-        raise ValueError("--compare-robots names each model once, and replaces --robot")
-    robots = args.compare_robots or [args.robot]
-    for robot in robots:  # a model that cannot be used fails here, before a policy is loaded or a scene compiled
-        on_robot(config, robot, args.physics)
-    policy, config = load_policy(args.run_dir, args.checkpoint)
-    if args.pilot:  # replaces the run's own pilot (none: the student's own corrections)
-        pilot = {"teacher": config.distill.teacher, "none": ""}.get(args.pilot, args.pilot)
-        config = dataclasses.replace(config, pilot=pilot).resolved()
-    configs = {r: on_robot(config, r) for r in robots}
-    report = dict(physics=args.physics, seed=args.seed, checkpoint=str(policy.checkpoint), trained_steps=policy.step,
-                  task=config.task)
-    if args.ood:
-        report["ood"] = True
-    if args.nominal:
-        report["nominal"] = True
-    if args.compare_robots:
-        report["robots"] = {r: _evaluate_run(args, c, policy) for r, c in configs.items()}
-        report["ratios"] = robot_ratios(report["robots"], robots[0])
-    else:
-        report.update(_evaluate_run(args, configs[args.robot], policy), robot=args.robot)
+    report = evaluation_report(eval_request(args))
     print(json.dumps(report) if args.json else json.dumps(report, indent=2))
     return 0
 
 
-def _evaluate_run(args, config, policy) -> dict:
-    """`legged eval`'s figures of `policy` with the run config `config` (its robot model chosen)."""
-    import dataclasses
+def eval_request(args):
+    """`legged eval`'s options as a policies.eval_report.EvalRequest."""
+    from policies.eval_report import EvalRequest
 
-    from legged.tasks import task_entry
-    from policies.evaluate import (HELD_OUT_SEED_OFFSET, confined_eval_config, evaluate, held_out, latent_probe,
-                                   nominal_config, ood_config, summarize)
-    from policies.run_dir import check_policy
-    from policies.training import build_env
-
-    soccer = task_entry(config.task).kind == "soccer"
-    report = {}
-    if task_entry(config.task).kind != "confined":
-        env_config = held_out(config.task, config.env)
-        if args.oracle:
-            env_config = dataclasses.replace(env_config, estimate_oracle=tuple(args.oracle))
-            report["oracle"] = list(args.oracle)
-        if args.tracker:
-            env_config = dataclasses.replace(env_config, vision_tracker=True)
-            report["tracker"] = True
-        if args.ood:
-            env_config = ood_config(env_config)
-        elif args.nominal:
-            env_config = nominal_config(env_config)
-        env = build_env(dataclasses.replace(config, env=env_config))
-        check_policy(policy, env)
-        if config.pilot:
-            report["pilot"] = config.pilot
-        samples = []
-        if config.drill:
-            report["drill"] = config.drill
-        elif soccer:
-            report["opponent"] = args.opponent or "scripted"
-            if env.game.layout.players_per_team > 1:
-                report["teammate"] = args.teammate or "self"
-        others = _other_players(args, env, policy) if soccer and not config.drill else ()  # a drill: nobody else
-        finals = evaluate(env, policy, args.episodes, args.seed, args.physics, args.num_envs or 16,
-                          args.threads or None, progress=not args.quiet, probe=samples, env_args=others)
-        report = dict(summarize(finals, False), **report)
-        if samples and hasattr(env, "observation_layout"):
-            report["latent_probe_r2"] = latent_probe(samples, env.observation_layout())
-        if args.compare_teacher:
-            report.update(_in_the_same_games(args, config.distill.teacher, finals, "teacher"))
-        if args.compare_pilot:
-            report.update(_in_the_same_games(args, config.pilot, finals, "pilot"))
-    else:  # a fixed set of held-out worlds per difficulty, one episode each, every episode to its end
-        report["world_seed"] = args.world_seed if args.world_seed is not None else \
-            config.env.world_seed + HELD_OUT_SEED_OFFSET
-        report["difficulties"] = {}
-        for level in args.difficulty if args.difficulty is not None else config.env.difficulties:
-            env_config = confined_eval_config(config.env, level, args.episodes, args.world_seed)
-            env_config = nominal_config(env_config) if args.nominal else env_config
-            env = build_env(dataclasses.replace(config, env=env_config), progress=not args.quiet)
-            check_policy(policy, env)
-            finals = evaluate(env, policy, args.episodes, args.seed, args.physics,
-                              args.num_envs or min(args.episodes, 64), args.threads or None,
-                              progress=not args.quiet, per_world=True)
-            report["difficulties"][str(level)] = summarize(finals, True)
-    return report
-
-
-def _other_players(args, env, policy) -> tuple:
-    """The soccer players `legged eval` plays `policy` with in `env`: the opponent, and in 2v2 its teammate."""
-    from policies.evaluate import soccer_opponent
-
-    others = (soccer_opponent(args.opponent or "scripted", env),)
-    if env.game.layout.players_per_team > 1:
-        return others + (soccer_opponent(args.teammate or "self", env, policy),)
-    if args.teammate:
-        raise ValueError("--teammate applies to 2v2 tasks; this one has one player per team")
-    return others
-
-
-def _in_the_same_games(args, state_run: str, finals: list[dict], role: str) -> dict:
-    """`legged eval --compare-teacher` (or `--compare-pilot`): the student's distillation teacher (or its pilot)
-    played at the truth in the games the student played (the same seed and batches start the same games), and
-    the student's goals over the state player's, as `role` and `goals_vs_<role>`."""
-    from policies.evaluate import evaluate, paired_goal_ratio, state_player_game, summarize
-    from policies.policy_io import load_policy
-
-    player, config = load_policy(state_run)
-    env = state_player_game(config)
-    player_finals = evaluate(env, player, args.episodes, args.seed, args.physics, args.num_envs or 16,
-                             args.threads or None, progress=not args.quiet,
-                             env_args=_other_players(args, env, player))
-    summary = summarize(player_finals, False)
-    keep = ("goals_for_per_episode", "goals_against_per_episode", "win_rate", "fall_rate")
-    return {role: dict({k: summary[k] for k in keep}, run=state_run, checkpoint=str(player.checkpoint)),
-            f"goals_vs_{role}": paired_goal_ratio([f["goals_for"] for f in finals],
-                                                 [f["goals_for"] for f in player_finals])}
+    return EvalRequest(run_dir=args.run_dir, checkpoint=args.checkpoint, episodes=args.episodes, seed=args.seed,
+                       physics=args.physics, threads=args.threads or None, num_envs=args.num_envs,
+                       difficulty=None if args.difficulty is None else tuple(args.difficulty),
+                       world_seed=args.world_seed, opponent=args.opponent, teammate=args.teammate, ood=args.ood,
+                       nominal=args.nominal, oracle=tuple(args.oracle), pilot=args.pilot, tracker=args.tracker,
+                       compare_teacher=args.compare_teacher, compare_pilot=args.compare_pilot, robot=args.robot,
+                       compare_robots=tuple(args.compare_robots or ()), progress=not args.quiet)
 
 
 def cmd_plot(args) -> int:
+    """`legged plot`: a metric of runs into a PNG."""
     from policies.plots import plot_runs
 
     path = plot_runs(args.run_dir, args.y, args.x, args.out, args.hline)
@@ -206,6 +78,7 @@ def cmd_plot(args) -> int:
 
 
 def cmd_table(args) -> int:
+    """`legged table`: runs' saved evaluations as a markdown table."""
     from policies.tables import eval_table
 
     print(eval_table(args.run_dir, args.files, args.metrics))
@@ -213,24 +86,17 @@ def cmd_table(args) -> int:
 
 
 def cmd_export(args) -> int:
-    from pathlib import Path
-
-    from policies.export import export_onnx
-    from policies.policy_io import load_policy
+    """`legged export`: the run's policy as ONNX (policies.export), checked; the check printed as JSON."""
+    from policies.export import export_run
 
     if not args.onnx:
         raise ValueError("choose a format: --onnx")
-    policy, config = load_policy(args.run_dir, args.checkpoint)
-    out = Path(args.out or f"{args.run_dir}/policy.onnx")
-    report = export_onnx(policy, out)
-    if config.pilot:  # a piloted vision student deploys as two networks: it estimates, the pilot steers
-        pilot, _ = load_policy(config.pilot)
-        report["pilot"] = dict(export_onnx(pilot, out.with_name(f"{out.stem}_pilot.onnx")), run=config.pilot)
-    print(json.dumps(report))
+    print(json.dumps(export_run(args.run_dir, args.checkpoint, args.out)))
     return 0
 
 
 def cmd_camera(args) -> int:
+    """`legged camera`: each soccer player's head camera, the ray caster beside MuJoCo's renderer."""
     from legged.soccer.states import game_start
     from legged.soccer.vision import write_camera_images
     from legged.tasks import TASKS, make, task_entry
@@ -256,6 +122,7 @@ def cmd_camera(args) -> int:
 
 
 def cmd_tasks(args) -> int:
+    """`legged tasks`: the registered tasks."""
     from legged.tasks import TASKS
 
     rows = [{"task": e.name, "kind": e.kind, "robot": e.robot.name, "physics": list(e.physics),
@@ -269,22 +136,14 @@ def cmd_tasks(args) -> int:
     return 0
 
 
-def cmd_demo(args) -> int:
-    from legged.cli_nav import shipped_policy
-    from legged.demo import run_demo
-
-    view = {"host": args.host, "port": args.port} if args.view else None
-    return run_demo(args.out, args.seed, args.difficulty, shipped_policy(args.policy), view=view,
-                    physics=args.physics)
-
-
 def cmd_view(args) -> int:
+    """`legged view`: the browser dashboard, or with --save a recorded rollout."""
     from web.app import Dashboard, DashboardConfig
     from web.source import ViewRequest, resolve
 
     request = ViewRequest(run_dir=args.run_dir, task=args.task, checkpoint=args.checkpoint, trajectory=args.trajectory,
-                          num_envs=args.num_envs, physics=args.physics, seed=args.seed, steps=args.steps, host=args.host,
-                          port=None if args.save else args.port, opponent=args.opponent,
+                          num_envs=args.num_envs, physics=args.physics, seed=args.seed, steps=args.steps,
+                          host=args.host, port=None if args.save else args.port, opponent=args.opponent,
                           drill=args.drill, robot=args.robot)
     resolved = resolve(request, log=lambda msg: print(msg, flush=True))
     if args.save:
@@ -302,13 +161,8 @@ def cmd_view(args) -> int:
     return 0
 
 
-def _add_server_options(parser, port: int = 8080) -> None:
-    parser.add_argument("--host", default="127.0.0.1",
-                        help="address to bind (default 127.0.0.1, this machine only; 0.0.0.0 exposes it)")
-    parser.add_argument("--port", type=bounded(int, 0, 65535), default=port, help="port to bind (0: any free port)")
-
-
 def build_parser() -> argparse.ArgumentParser:
+    """The `legged` parser: every command, each with its function as `fn`."""
     p = Parser(prog="legged", description="Legged-robot RL in MuJoCo/MJX.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
 
@@ -320,7 +174,8 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("task", nargs="?", help="task name (legged tasks)")
     tr.add_argument("--backend", choices=["rsl", "brax"], default="rsl")
     tr.add_argument("--num-envs", type=bounded(int, 1, 2**20), default=256)
-    tr.add_argument("--timesteps", type=bounded(int, 1, 10**12), default=1_000_000, help="environment steps, all envs together")
+    tr.add_argument("--timesteps", type=bounded(int, 1, 10**12), default=1_000_000,
+                    help="environment steps, all envs together")
     tr.add_argument("--seed", type=SEED, default=0)
     add_physics_options(tr)
     tr.add_argument("--run-dir", default=None, help="where the run is written (default runs/<task>-<time>)")
@@ -410,9 +265,11 @@ def build_parser() -> argparse.ArgumentParser:
     tb = sub.add_parser("table", help="runs' saved evaluations side by side, as a markdown table")
     tb.add_argument("run_dir", nargs="+", help="run directories, one row each")
     tb.add_argument("--files", type=lambda s: [f for f in s.split(",") if f], default=["eval_native.json"],
-                    help="comma-separated evaluation JSON files in each run (e.g. eval_native.json,eval_ood_native.json)")
+                    help="comma-separated evaluation JSON files in each run (e.g. "
+                         "eval_native.json,eval_ood_native.json)")
     tb.add_argument("--metrics", type=lambda s: [m for m in s.split(",") if m],
-                    default=["episode_return", "tracking_error_mps", "fall_rate"], help="comma-separated report fields")
+                    default=["episode_return", "tracking_error_mps", "fall_rate"],
+                    help="comma-separated report fields")
     tb.set_defaults(fn=cmd_table)
 
     ex = sub.add_parser("export", help="export a run's policy (ONNX) and check it against the framework")
@@ -435,17 +292,7 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--json", action="store_true", help="one JSON list")
     t.set_defaults(fn=cmd_tasks)
 
-    d = sub.add_parser("demo", help="generate a tunnel, plan through it, and watch the shipped follower walk Go1 "
-                                    "to the goal")
-    d.add_argument("--out", default="legged-demo", help="where to write the world files")
-    d.add_argument("--seed", type=SEED, default=0)
-    d.add_argument("--difficulty", type=bounded(int, 0, 20), default=1)
-    d.add_argument("--policy", default=None, help="a waypoint-follower run (default: the shipped follower)")
-    d.add_argument("--physics", type=choices("mjx", "native"), default=["native"],
-                   help="comma-separated physics engines to navigate in (default native; mjx,native runs both)")
-    d.add_argument("--view", action="store_true", help="afterwards, serve the dashboard on the demo's world")
-    _add_server_options(d)
-    d.set_defaults(fn=cmd_demo)
+    add_demo_command(sub)
 
     v = sub.add_parser("view", help="the browser dashboard: a run's policy, a task, or a recorded trajectory")
     v.add_argument("run_dir", nargs="?", default=None,
@@ -457,7 +304,8 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--physics", choices=["mjx", "native"], default="mjx",
                    help="physics of the rollouts: mjx, or native (MuJoCo's C engine; no MJX compilation of physics)")
     v.add_argument("--seed", type=SEED, default=0, help="seed of the first rollout")
-    v.add_argument("--steps", type=bounded(int, 1, 100000), default=500, help="control steps per rollout (50 per second)")
+    v.add_argument("--steps", type=bounded(int, 1, 100000), default=500,
+                   help="control steps per rollout (50 per second)")
     v.add_argument("--opponent", default=None, metavar="placo|scripted|RUN",
                    help="soccer: what drives the other robots (default: the standing script)")
     v.add_argument("--drill", default=None, metavar="walk|empty-goal|getup",
@@ -465,12 +313,14 @@ def build_parser() -> argparse.ArgumentParser:
     add_robot_option(v)
     v.add_argument("--save", default=None, metavar="FILE.npz",
                    help="record one rollout into FILE.npz and exit instead of serving")
-    _add_server_options(v)
+    add_server_options(v)
     v.set_defaults(fn=cmd_view)
     return p
 
 
 def main(argv=None) -> int:
+    """Run the `legged` command with `argv` (default: sys.argv[1:]); returns the exit code (2: bad input, with
+    one line on stderr)."""
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
         args = build_parser().parse_args(join_negative_coordinates(argv))
@@ -484,7 +334,3 @@ def main(argv=None) -> int:
     except (UnknownTaskError, WorldError, OSError, ValueError) as exc:
         print(f"legged {args.command}: error: {' '.join(str(exc).split())}", file=sys.stderr)  # one line
         return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

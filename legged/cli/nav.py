@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from legged.cli_args import SEED, add_physics_options, add_robot_option, bounded, ints, xyz
+from legged.cli.args import SEED, add_physics_options, add_robot_option, bounded, ints, xyz
 
 
 def _print_records(records: list[dict], as_json: bool, print_table) -> int:
@@ -16,11 +16,22 @@ def _print_records(records: list[dict], as_json: bool, print_table) -> int:
     return 0
 
 
-def cmd_world(args) -> int:
-    from legged.robots import GO1
-    from legged.worlds import generate_world, write_world
+def _generated_world(args):
+    """The world of --seed and --level (legged.worlds.levels) or else --difficulty (the tunnels)."""
+    from legged.worlds.generator import WorldConfig
+    from legged.worlds.levels import LevelConfig, make_world
 
-    world = generate_world(args.seed, args.difficulty)
+    if args.level is not None:
+        return make_world(args.seed, args.level, WorldConfig(), LevelConfig())
+    return make_world(args.seed, args.difficulty, WorldConfig(), None)
+
+
+def cmd_world(args) -> int:
+    """`legged world`: generate a world and write its files."""
+    from legged.robots import GO1
+    from legged.worlds import write_world
+
+    world = _generated_world(args)
     files = write_world(world, GO1, args.out)
     summary = dict(world.summary(), files=files)
     print(json.dumps(summary) if args.json else
@@ -50,17 +61,17 @@ def _scene_maps(args):
 
 
 def cmd_plan(args) -> int:
+    """`legged plan`: body-pose waypoints through a generated world or an MJCF scene."""
     import numpy as np
 
     from planners import HeightMaps, plan_path
     from legged.robots import GO1
-    from legged.worlds import generate_world
 
     config = _planner_config(args)  # bad settings fail before any sampling
     if args.scene:
         maps, start, goal = _scene_maps(args), np.array(args.start), np.array(args.goal)
     else:
-        world = generate_world(args.seed, args.difficulty)
+        world = _generated_world(args)
         maps = HeightMaps.from_world(world)
         start = np.array(args.start) if args.start else world.start
         goal = np.array(args.goal) if args.goal else world.goal
@@ -76,6 +87,7 @@ def cmd_plan(args) -> int:
 
 
 def cmd_bench_plan(args) -> int:
+    """`legged bench plan`: planning time and path length, or the narrow scenes."""
     from planners.bench import PREVIOUS_PLANNER, bench_narrow, bench_planner, print_table
 
     if args.narrow:
@@ -85,7 +97,8 @@ def cmd_bench_plan(args) -> int:
             print(json.dumps(report))
         else:
             for r in report["scenes"]:
-                print(f"{r['scene']:>20} {r['config']:>8} {'solved' if r['solved'] else 'FAILED':>7} {r['time_s']:7.3f} s")
+                print(f"{r['scene']:>20} {r['config']:>8} {'solved' if r['solved'] else 'FAILED':>7} "
+                      f"{r['time_s']:7.3f} s")
             for label, summary in report["summary"].items():
                 print(f"{label}: {summary['solved']}/{summary['scenes']} solved, median {summary['median_time_s']} s")
         return 0
@@ -95,11 +108,12 @@ def cmd_bench_plan(args) -> int:
 
 
 def cmd_bench_navigate(args) -> int:
+    """`legged bench navigate`: plan, follow and replan on a directory's scenes."""
     from policies.nav_bench import bench_navigate, print_table
 
     report = bench_navigate(args.scenes, shipped_policy(args.policy), args.seeds, args.first_seed, args.robot,
                             args.physics, args.threads or None, args.resolution, _planner_config(args),
-                            progress=not args.quiet)
+                            progress=not args.quiet, max_speed=args.max_speed)
     if args.json:
         print(json.dumps(report))
     else:
@@ -108,6 +122,7 @@ def cmd_bench_navigate(args) -> int:
 
 
 def cmd_scenes(args) -> int:
+    """`legged scenes`: write the navigation benchmark's scenes."""
     from legged.worlds.bench_scenes import build
     from legged.worlds.scenes import write_scenes
 
@@ -123,8 +138,8 @@ def _add_planner_options(parser) -> None:
     from planners import PLANNERS
 
     parser.add_argument("--planner", default="auto",
-                        help="auto (RRTConnect for 60 motion checks, then the complete lattice search), lattice, or an OMPL "
-                             f"planner: {', '.join(PLANNERS)} (RRT*, BIT* style names work too)")
+                        help="auto (RRTConnect for 60 motion checks, then the complete lattice search), lattice, or "
+                             f"an OMPL planner: {', '.join(PLANNERS)} (RRT*, BIT* style names work too)")
     parser.add_argument("--space", choices=["projected", "full"], default="projected",
                         help="projected: search x, y, yaw with body height, roll and pitch derived from the gap "
                              "(default); full: sample all six (the earlier planner)")
@@ -143,23 +158,29 @@ SHIPPED_FOLLOWER = "assets/policies/go1-confined-follower"
 
 
 def cmd_navigate(args) -> int:
+    """`legged navigate`: plan, follow and replan; 0 if the robot reached the goal."""
     import numpy as np
 
     from policies.navigate import Unreachable, load_follower, navigate
-    from legged.worlds import generate_world
 
     policy_dir = shipped_policy(args.policy)
-    load_follower(policy_dir, args.robot, args.physics)  # a policy of another task or an unusable robot model fails first
+    load_follower(policy_dir, args.robot, args.physics)  # another task's policy or an unusable robot model fails first
     if args.scene:
         maps, start, goal = _scene_maps(args), np.array(args.start), np.array(args.goal)
         where = {"scene": args.scene}
     else:
         if args.start is not None or args.goal is not None:
-            raise ValueError("--start and --goal go with --scene; a generated world (--seed, --difficulty) has its own")
-        world = generate_world(args.seed, args.difficulty)
+            raise ValueError("--start and --goal go with --scene; a generated world (--seed, --difficulty or --level) "
+                             "has its own")
+        world = _generated_world(args)
         maps, start, goal = world, world.start, world.goal
-        where = {"world_seed": args.seed, "difficulty": args.difficulty}
-    recording = NavigationRecording() if (args.view or args.record) else None
+        where = {"world_seed": args.seed, **({"difficulty": args.difficulty} if args.level is None else
+                                             {"level": args.level})}
+    recording = None
+    if args.view or args.record:
+        from web.nav_recording import NavigationRecording
+
+        recording = NavigationRecording()
     if args.view:
         from web.source import check_port
 
@@ -167,7 +188,7 @@ def cmd_navigate(args) -> int:
     try:
         report = navigate(policy_dir, maps, start, goal, args.physics, args.threads or None,
                           planner=_planner_config(args), seed=args.seed, robot=args.robot,
-                          on_step=None if recording is None else recording.add)
+                          on_step=None if recording is None else recording.add, max_speed=args.max_speed)
     except Unreachable as exc:
         print(json.dumps(dict(where, success=False, reachable=False, error=str(exc))) if args.json
               else f"legged navigate: {exc}")
@@ -189,64 +210,40 @@ def cmd_navigate(args) -> int:
     return 0 if report["success"] else 1
 
 
-class NavigationRecording:
-    """Collects a navigation's frames (via `navigate(on_step=...)`) into a dashboard trajectory with its replans."""
-
-    def __init__(self):
-        self.frames, self.plans, self.env = [], [], None
-
-    def add(self, env, state, plan) -> None:
-        """One frame of environment 0; a plan not seen before is a replan from this frame on."""
-        import numpy as np
-
-        self.env = env
-        if not self.plans or self.plans[-1][1] is not plan:
-            self.plans.append((len(self.frames), plan))
-        self.frames.append({"qpos": np.asarray(state.pipeline_state.qpos[0], np.float32),
-                            "reward": float(state.reward[0]), "waypoint": int(state.info["waypoint"][0]),
-                            "metrics": {k: float(v[0]) for k, v in state.metrics.items()}})
-
-    def trajectory(self, info: dict):
-        """The recorded navigation as a web.trajectory.Trajectory (one environment)."""
-        import numpy as np
-
-        from web.trajectory import Trajectory
-
-        width = max(len(p.waypoints) for _, p in self.plans)
-        padded = lambda w: np.concatenate([w, np.repeat(w[-1:], width - len(w), 0)]).astype(np.float32)
-        first, later = self.plans[0][1], self.plans[1:]
-        column = lambda key: np.array([f[key] for f in self.frames])[:, None]
-        info = {k: v for k, v in info.items() if isinstance(v, (str, int, float, bool, type(None), list))}
-        return Trajectory(
-            model=self.env.mj_model, dt=float(self.env.dt), qpos=np.stack([f["qpos"] for f in self.frames])[:, None],
-            reward=column("reward").astype(np.float32), done=np.zeros((len(self.frames), 1), bool),
-            metrics={k: np.array([f["metrics"][k] for f in self.frames], np.float32)[:, None]
-                     for k in self.frames[0]["metrics"]},
-            offsets=np.zeros((1, 3)), info=info, paths=padded(first.waypoints)[None],
-            path_len=np.array([len(first.waypoints)]), waypoint=column("waypoint").astype(np.int32),
-            goal=np.asarray(first.waypoints[-1:, :3], np.float32),
-            replans=np.stack([padded(p.waypoints) for _, p in later]) if later else None,
-            replan_len=np.array([len(p.waypoints) for _, p in later]) if later else None,
-            replan_frame=np.array([f for f, _ in later]) if later else None)
-
-
 def shipped_policy(policy: str | None) -> str:
     """The policy run directory to use: `policy`, else the shipped follower (a clear error if it is absent)."""
     from pathlib import Path
 
     if policy:
         return policy
-    for base in (Path.cwd(), Path(__file__).resolve().parent.parent):
+    for base in (Path.cwd(), Path(__file__).resolve().parents[2]):
         if (base / SHIPPED_FOLLOWER / "config.yaml").is_file():
             return str(base / SHIPPED_FOLLOWER)
     raise FileNotFoundError(f"no shipped follower at {SHIPPED_FOLLOWER}; pass --policy RUN (a confined-waypoints run)")
+
+
+def _add_speed_option(parser) -> None:
+    """--max-speed: the navigation's speed limit."""
+    parser.add_argument("--max-speed", type=bounded(float, 0.0, 10.0), default=None, metavar="M/S",
+                        help="speed limit, m/s (default: the policy's env.max_speed, 1 m/s); a follower trained with "
+                             "env.speed_command is told it, one trained without runs at its own speed and is only "
+                             "measured against it")
+
+
+def _add_level_option(parser) -> None:
+    """--level: a generated world of legged.worlds.levels instead of the tunnels."""
+    parser.add_argument("--level", type=bounded(int, 0, 4), default=None,
+                        help="a world of level 0-4 instead of --difficulty's tunnels: tunnels; corridors, open sky, "
+                        "crawls; bars, blocks, pillars; steps, ramps, turns; voids")
 
 
 def add_navigation_commands(sub) -> None:
     """The `world`, `plan` and `navigate` sub-commands."""
     w = sub.add_parser("world", help="generate a confined world (world.npz + world.xml)")
     w.add_argument("--seed", type=SEED, default=0)
-    w.add_argument("--difficulty", type=bounded(int, 0, 20), default=0, help="0/1/2 give 3/4/5 m tunnels; higher is longer")
+    w.add_argument("--difficulty", type=bounded(int, 0, 20), default=0,
+                   help="0/1/2 give 3/4/5 m tunnels; higher is longer")
+    _add_level_option(w)
     w.add_argument("--out", required=True, help="output directory")
     w.add_argument("--json", action="store_true", help="print a JSON summary")
     w.set_defaults(fn=cmd_world)
@@ -254,6 +251,7 @@ def add_navigation_commands(sub) -> None:
     pl = sub.add_parser("plan", help="plan body-pose waypoints through a generated world or an MJCF scene")
     pl.add_argument("--seed", type=SEED, default=0, help="seed of the generated world")
     pl.add_argument("--difficulty", type=bounded(int, 0, 20), default=0)
+    _add_level_option(pl)
     pl.add_argument("--scene", default=None, help="plan through this MJCF scene instead (needs --start, --goal)")
     pl.add_argument("--start", type=xyz, default=None, help="body centre X,Y,Z (default: the world's start)")
     pl.add_argument("--goal", type=xyz, default=None, help="body centre X,Y,Z (default: the world's goal)")
@@ -261,21 +259,26 @@ def add_navigation_commands(sub) -> None:
                     help="map resolution when sampling --scene, m (the maps are widened by one cell to be safe)")
     _add_planner_options(pl)
     pl.add_argument("--json", action="store_true",
-                    help="print one JSON object: waypoints [x, y, z, roll, pitch, yaw], length_m, plan_time_s, planner")
+                    help="print one JSON object: waypoints [x, y, z, roll, pitch, yaw], length_m, plan_time_s, "
+                         "planner")
     pl.set_defaults(fn=cmd_plan)
 
     nv = sub.add_parser("navigate", help="plan, follow with a trained waypoint follower, replan when straying")
     nv.add_argument("--scene", default=None, help="MJCF scene to navigate (else a generated world)")
     nv.add_argument("--start", type=xyz, default=None, help="with --scene: start body centre X,Y,Z")
     nv.add_argument("--goal", type=xyz, default=None, help="with --scene: goal body centre X,Y,Z")
-    nv.add_argument("--resolution", type=bounded(float, 0.005, 1.0), default=0.025, help="map resolution of --scene, m")
+    nv.add_argument("--resolution", type=bounded(float, 0.005, 1.0), default=0.025,
+                    help="map resolution of --scene, m")
     nv.add_argument("--seed", type=SEED, default=0, help="world seed (without --scene) and episode seed")
     nv.add_argument("--difficulty", type=bounded(int, 0, 20), default=0, help="generated world's level")
+    _add_level_option(nv)
     nv.add_argument("--policy", default=None, help=f"a waypoint-follower run (default: {SHIPPED_FOLLOWER})")
+    _add_speed_option(nv)
     add_physics_options(nv, "native")
     add_robot_option(nv)
     _add_planner_options(nv)
-    nv.add_argument("--view", action="store_true", help="afterwards, show the navigation and its replans in the dashboard")
+    nv.add_argument("--view", action="store_true",
+                    help="afterwards, show the navigation and its replans in the dashboard")
     nv.add_argument("--record", default=None, metavar="FILE", help="save the navigation as a trajectory (.npz)")
     nv.add_argument("--host", default="127.0.0.1", help="dashboard address (with --view)")
     nv.add_argument("--port", type=bounded(int, 0, 65535), default=8080, help="dashboard port (with --view)")
@@ -292,7 +295,8 @@ def add_bench_plan(bsub) -> None:
     """The `bench plan` and `bench navigate` sub-commands."""
     bp = bsub.add_parser("plan", help="planning time and path length per difficulty over generated worlds")
     bp.add_argument("--difficulties", type=ints(0, 20), default=[0, 1, 2], help="comma-separated levels")
-    bp.add_argument("--worlds", type=bounded(int, 1, 10000), default=20, help="worlds per difficulty (seeds first-seed onward)")
+    bp.add_argument("--worlds", type=bounded(int, 1, 10000), default=20,
+                    help="worlds per difficulty (seeds first-seed onward)")
     bp.add_argument("--first-seed", type=SEED, default=0)
     bp.add_argument("--narrow", action="store_true",
                     help="instead: the fixed narrow-passage scenes (low bars, side gaps), beside the previous planner")
@@ -307,6 +311,7 @@ def add_bench_plan(bsub) -> None:
     bn.add_argument("--seeds", type=bounded(int, 1, 1000), default=5, help="episodes per scene")
     bn.add_argument("--first-seed", type=SEED, default=0)
     bn.add_argument("--policy", default=None, help=f"a waypoint-follower run (default: {SHIPPED_FOLLOWER})")
+    _add_speed_option(bn)
     bn.add_argument("--resolution", type=bounded(float, 0.005, 1.0), default=0.025, help="map resolution, m")
     add_physics_options(bn, "native")
     add_robot_option(bn)

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import json
 
-from legged.cli_args import SEED, add_physics_options, add_robot_option, bounded
+from legged.cli.args import SEED, add_physics_options, add_robot_option, bounded
 
 
 def cmd_drill(args) -> int:
+    """`legged drill`: one skill of a soccer player, measured and printed as JSON."""
     from legged.soccer.drills import DRILLS
     from policies.drill import run_drill
 
