@@ -1,66 +1,58 @@
-"""Training curves as PNG files (pillow only), for run directories and reports: `legged plot RUN [RUN ...]`."""
+"""Training curves as PNG files (matplotlib, drawn off-screen), for run directories and reports:
+`legged plot RUN [RUN ...]`."""
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
 
-from PIL import Image, ImageDraw
+import numpy as np
 
 COLOURS = ((31, 119, 180), (214, 39, 40), (44, 160, 44), (148, 103, 189), (255, 127, 14), (140, 86, 75),
            (227, 119, 194), (23, 190, 207))
-"""Line colours, in series order."""
+"""Line colours (RGB, 0-255), in series order."""
+
+DPI = 100
+"""Pixels per inch of the written PNG: a figure of `size` pixels is `size / DPI` inches."""
 
 
-def _ticks(lo: float, hi: float, count: int = 5) -> list[float]:
-    """About `count` round tick values covering [lo, hi]."""
-    span = max(hi - lo, 1e-12)
-    step = 10 ** math.floor(math.log10(span / count))
-    step *= min((m for m in (1, 2, 5, 10) if span / (step * m) <= count), default=10)
-    first = math.ceil(lo / step) * step
-    return [first + k * step for k in range(int((hi - first) / step + 1e-9) + 1)]
+def _rgb(colour: tuple[int, int, int]) -> tuple[float, float, float]:
+    """A 0-255 RGB colour as matplotlib's 0-1 floats."""
+    return tuple(c / 255.0 for c in colour)
 
 
 def line_plot(series: dict, path: str | Path, xlabel: str, ylabel: str, title: str = "",
               hline: float | None = None, size: tuple[int, int] = (820, 500)) -> Path:
-    """Draw `series` ({label: (xs, ys)}) as lines on shared axes into a PNG; `hline` draws a dashed goal."""
-    points = [(x, y) for xs, ys in series.values() for x, y in zip(xs, ys) if y is not None and math.isfinite(y)]
-    if not points:
+    """Draw `series` ({label: (xs, ys)}) as lines on shared axes into a PNG of `size` pixels; `hline` draws a
+    dashed goal. Points whose y is None or not finite are left out (the line joins its neighbours)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    lines = {label: [(x, y) for x, y in zip(xs, ys) if y is not None and math.isfinite(y)]
+             for label, (xs, ys) in series.items()}
+    if not any(lines.values()):
         raise ValueError(f"nothing to plot: no finite values of {ylabel}")
-    xs, ys = zip(*points)
-    ys = ys + ((hline,) if hline is not None else ())
-    x0, x1 = min(xs), max(xs) if max(xs) > min(xs) else min(xs) + 1
-    y0, y1 = min(ys), max(ys) if max(ys) > min(ys) else min(ys) + 1
-    pad = 0.05 * (y1 - y0)
-    y0, y1 = y0 - pad, y1 + pad
-    w, h = size
-    left, right, top, bottom = 80, 20, 40, 60
-    img = Image.new("RGB", size, "white")
-    draw = ImageDraw.Draw(img)
-    px = lambda x: left + (x - x0) / (x1 - x0) * (w - left - right)
-    py = lambda y: h - bottom - (y - y0) / (y1 - y0) * (h - top - bottom)
-    draw.rectangle([left, top, w - right, h - bottom], outline="black")
-    for t in _ticks(x0, x1):
-        draw.line([px(t), h - bottom, px(t), h - bottom + 5], fill="black")
-        draw.text((px(t) - 15, h - bottom + 8), f"{t:g}", fill="black")
-    for t in _ticks(y0, y1):
-        draw.line([left - 5, py(t), left, py(t)], fill="black")
-        draw.line([left, py(t), w - right, py(t)], fill=(230, 230, 230))
-        draw.text((5, py(t) - 6), f"{t:.3g}", fill="black")
+    fig = Figure(figsize=(size[0] / DPI, size[1] / DPI), dpi=DPI, layout="constrained", facecolor="white")
+    canvas = FigureCanvasAgg(fig)                            # Agg: drawn in memory, no display needed
+    ax = fig.add_subplot()
+    for k, (label, points) in enumerate(lines.items()):
+        xs, ys = zip(*points) if points else ((), ())
+        ax.plot(xs, ys, color=_rgb(COLOURS[k % len(COLOURS)]), linewidth=1.5, label=label,
+                marker="o" if len(points) == 1 else None)   # a lone point still shows
     if hline is not None:
-        for a in range(left, w - right, 12):
-            draw.line([a, py(hline), min(a + 6, w - right), py(hline)], fill=(120, 120, 120))
-    for k, (label, (sx, sy)) in enumerate(series.items()):
-        colour = COLOURS[k % len(COLOURS)]
-        line = [(px(x), py(y)) for x, y in zip(sx, sy) if y is not None and math.isfinite(y)]
-        if len(line) > 1:
-            draw.line(line, fill=colour, width=2)
-        draw.text((left + 10, top + 8 + 14 * k), label, fill=colour)
-    draw.text((w / 2 - 6 * len(title) / 2, 12), title, fill="black")
-    draw.text((w / 2 - 3 * len(xlabel), h - 25), xlabel, fill="black")
-    draw.text((5, top - 25), ylabel, fill="black")
+        ax.axhline(hline, color=_rgb((120, 120, 120)), linestyle="--", linewidth=1)
+    ax.grid(True, axis="y", color=_rgb((230, 230, 230)))
+    ax.set_axisbelow(True)
+    ax.ticklabel_format(axis="both", style="sci", scilimits=(-3, 6), useOffset=False)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title)
+    ax.legend(loc="best", frameon=False)
+    canvas.draw()
     path = Path(path)
-    img.save(path)
+    Image.fromarray(np.asarray(canvas.buffer_rgba())).convert("RGB").save(path, format="PNG")  # opaque: RGB
     return path
 
 
