@@ -52,7 +52,8 @@ def _read(path: Path) -> Plan | PlanningError | None:
             if "error" in data.files:
                 return PlanningError(str(data["error"]))
             return Plan(waypoints=data["waypoints"], length_m=float(data["length_m"]),
-                        plan_time_s=float(data["plan_time_s"]), planner=str(data["planner"]))
+                        plan_time_s=float(data["plan_time_s"]), planner=str(data["planner"]),
+                        speeds=data["speeds"] if "speeds" in data.files else None)
     except Exception:  # unreadable or partial entry: plan again (writes are atomic, so this is rare)
         return None
 
@@ -63,8 +64,9 @@ def _write(path: Path, result: Plan | PlanningError) -> None:
     if isinstance(result, PlanningError):
         np.savez(tmp, error=str(result))
     else:
+        extra = {} if result.speeds is None else {"speeds": result.speeds}
         np.savez(tmp, waypoints=result.waypoints, length_m=result.length_m, plan_time_s=result.plan_time_s,
-                 planner=result.planner)
+                 planner=result.planner, **extra)
     tmp.replace(path)
 
 

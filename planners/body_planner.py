@@ -93,6 +93,10 @@ class PlannerConfig:
     """Largest state-space step between collision checks along a motion, metres."""
     body: BodyCheckConfig = BodyCheckConfig()
     """Body-box margin and leg-reach check."""
+    crouch_speed: float | None = None
+    """Speed limit at waypoints where the body must crouch (its centre more than 3 cm below the robot's standing
+    height above the floor: under a bar or a low roof), m/s; the plan's `speeds` hand it to the follower (None: no
+    limit of the plan's own)."""
     space: str = "projected"
     """projected: search x, y, yaw, with height, roll and pitch put in the middle of the feasible band
     (planners.pose_band; narrow height bands cost nothing); full: sample all six (the earlier planner)."""
@@ -105,6 +109,8 @@ class PlannerConfig:
         for name in ("time_limit", "quick_checks", "spacing", "angle_weight", "max_step", "check_step"):
             if getattr(self, name) <= 0:
                 raise PlanningError(f"{name} must be > 0, got {getattr(self, name)}")
+        if self.crouch_speed is not None and not 0 < self.crouch_speed < math.inf:
+            raise PlanningError(f"crouch_speed must be a positive speed in m/s, got {self.crouch_speed}")
         if self.max_checks < 0:
             raise PlanningError(f"max_checks must be >= 0 (0: the time limit alone), got {self.max_checks}")
         if not (0 <= self.max_roll < math.pi / 2 and 0 <= self.max_pitch < math.pi / 2):
@@ -123,11 +129,16 @@ class Plan:
     """Time the planner searched (simplification excluded), seconds."""
     planner: str
     """Canonical name of the planner used."""
+    speeds: np.ndarray | None = None
+    """Speed limit per waypoint, m/s (NaN: none of the plan's own), or None (`PlannerConfig.crouch_speed`)."""
 
     def to_json(self) -> dict:
         """The plan as a JSON-friendly dict (waypoints rounded to 0.1 mm / 0.1 mrad)."""
-        return {"waypoints": np.round(self.waypoints, 4).tolist(), "length_m": round(self.length_m, 4),
-                "plan_time_s": round(self.plan_time_s, 4), "planner": self.planner}
+        out = {"waypoints": np.round(self.waypoints, 4).tolist(), "length_m": round(self.length_m, 4),
+               "plan_time_s": round(self.plan_time_s, 4), "planner": self.planner}
+        if self.speeds is not None:  # JSON has no NaN: null where the plan sets no limit
+            out["speeds"] = [None if np.isnan(v) else round(float(v), 4) for v in self.speeds]
+        return out
 
 
 def as_pose(point, yaw: float) -> np.ndarray:
@@ -344,7 +355,12 @@ def _finish(vertices, space, checker, start_pose, goal_pose, config: PlannerConf
     bad = np.flatnonzero(~checker.valid(waypoints))
     if bad.size:  # cannot happen if every motion was validated; refuse rather than hand out a colliding path
         raise PlanningError(f"internal: waypoints {bad.tolist()} of the planned path fail the body check")
-    return Plan(waypoints=waypoints, length_m=path_length(waypoints), plan_time_s=float(plan_time), planner=name)
+    speeds = None
+    if config.crouch_speed is not None:
+        height = waypoints[:, 2] - checker.maps.floor_at(waypoints[:, :2])
+        speeds = np.where(height < checker.robot.standing_height - 0.03, config.crouch_speed, np.nan)
+    return Plan(waypoints=waypoints, length_m=path_length(waypoints), plan_time_s=float(plan_time), planner=name,
+                speeds=speeds)
 
 
 def nearest_valid_pose(checker: BodyChecker, pose, config: PlannerConfig, search_radius: float = 0.1) -> np.ndarray:

@@ -211,10 +211,9 @@ def _follow(vector, env, policy, maps, goal, spec, first_plan, seed, config, pla
 
 
 def plan_speeds(plan) -> np.ndarray | None:
-    """A plan's speed limit per waypoint (m/s, NaN: none of its own), where its planner gives them (`speeds`);
-    None: the navigation's limit everywhere."""
-    speeds = getattr(plan, "speeds", None)
-    return None if speeds is None else np.asarray(speeds, float)
+    """A plan's speed limit per waypoint (m/s, NaN: none of its own; `PlannerConfig.crouch_speed`), or None: the
+    navigation's limit everywhere."""
+    return None if plan.speeds is None else np.asarray(plan.speeds, float)
 
 
 def _hand_over(batch, waypoints: np.ndarray, speeds: np.ndarray | None = None, max_speed: float = 1.0):

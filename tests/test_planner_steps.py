@@ -98,3 +98,21 @@ def test_the_widest_band_is_that_of_the_best_places_for_the_feet():
         else:
             assert z_high[i] - z_low[i] == pytest.approx((best - 1) * step, abs=3 * step)
             assert ok[i, int(round((0.5 * (z_low[i] + z_high[i]) - 0.1) / step))]
+
+
+def test_a_plan_slows_where_the_body_must_crouch():
+    maps = _corridor()
+    ceiling = maps.ceiling.copy()
+    xs = maps.origin[0] + RES * np.arange(ceiling.shape[0])
+    ceiling[(np.abs(xs) < 0.4)] = 0.33  # a low roof over 0.8 m: the body crouches under it
+    low = HeightMaps(floor=np.minimum(maps.floor, ceiling), ceiling=ceiling, resolution=RES, origin=maps.origin)
+    config = PlannerConfig(planner="lattice", spacing=0.2, crouch_speed=0.3)
+    plan = plan_path(low, (-1.5, 0.0, 0.27), (1.5, 0.0, 0.27), GO1, config)
+    crouched = plan.waypoints[:, 2] < GO1.standing_height - 0.03
+    assert crouched.any() and not crouched.all()
+    np.testing.assert_array_equal(plan.speeds[crouched], 0.3)
+    assert np.isnan(plan.speeds[~crouched]).all()
+    assert plan.to_json()["speeds"].count(None) == (~crouched).sum()
+    assert _plan(maps).speeds is None  # no crouch speed, no limits of the plan's own
+    with pytest.raises(PlanningError, match="crouch_speed"):
+        PlannerConfig(crouch_speed=0.0).validate()

@@ -45,7 +45,8 @@ def _planner_config(args):
     from planners import PlannerConfig
 
     config = PlannerConfig(planner=args.planner, time_limit=args.time_limit, seed=args.planner_seed,
-                           spacing=args.spacing, space=args.space, max_checks=args.max_checks)
+                           spacing=args.spacing, space=args.space, max_checks=args.max_checks,
+                           crouch_speed=args.crouch_speed)
     config.validate()
     return config
 
@@ -151,6 +152,8 @@ def _add_planner_options(parser) -> None:
     parser.add_argument("--spacing", type=bounded(float, 0.01, 10.0), default=0.5,
                         help="largest distance between waypoints, m")
     parser.add_argument("--planner-seed", type=SEED, default=0, help="seed of OMPL's sampling")
+    parser.add_argument("--crouch-speed", type=bounded(float, 0.0, 10.0), default=None, metavar="M/S",
+                        help="speed limit of the plan where the body must crouch (under bars and low roofs)")
 
 
 SHIPPED_FOLLOWER = "assets/policies/go1-confined-follower"

@@ -22,9 +22,12 @@ class FlatRewards:
     """Weights of the velocity-tracking reward terms."""
 
     tracking_lin_vel: float = 1.0
-    """exp(-|v_cmd - v_xy|^2 / 0.25), velocities in the yaw frame."""
+    """exp(-|v_cmd - v_xy|^2 / tracking_sigma), velocities in the yaw frame."""
     tracking_yaw_rate: float = 0.5
-    """exp(-(w_cmd - w_z)^2 / 0.25)."""
+    """exp(-(w_cmd - w_z)^2 / tracking_sigma)."""
+    tracking_sigma: float = 0.25
+    """Squared-error scale of the two tracking terms ((m/s)^2, (rad/s)^2): smaller pays precision more (at 0.1 an
+    error of 0.14 m/s keeps 82% of the term, 0.055 m/s 97%; at 0.25, 92% and 99%)."""
     lin_vel_z: float = -2.0
     """Times the squared vertical base velocity."""
     ang_vel_xy: float = -0.05
@@ -100,8 +103,8 @@ class VelocityTrackingEnv(LeggedEnv):
         error = jnp.linalg.norm(cmd[:2] - local)
         info["tracking_error_sum"] = info["tracking_error_sum"] + error
         terms = {
-            "tracking_lin_vel": w.tracking_lin_vel * tracking(jnp.sum(jnp.square(cmd[:2] - local)), 0.25),
-            "tracking_yaw_rate": w.tracking_yaw_rate * tracking(jnp.square(cmd[2] - ang[2]), 0.25),
+            "tracking_lin_vel": w.tracking_lin_vel * tracking(jnp.sum(jnp.square(cmd[:2] - local)), w.tracking_sigma),
+            "tracking_yaw_rate": w.tracking_yaw_rate * tracking(jnp.square(cmd[2] - ang[2]), w.tracking_sigma),
             "lin_vel_z": w.lin_vel_z * jnp.square(data.qvel[2]),
             "ang_vel_xy": w.ang_vel_xy * jnp.sum(jnp.square(data.qvel[3:5])),
             "feet_air_time": w.feet_air_time * moving * jnp.sum((air - 0.5) * touchdown),
