@@ -13,6 +13,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from legged.envs.native import NativeEnvs, check_threads
 from legged.envs.vector import VectorEnv
 from legged.tasks import learner_env, make, task_entry
 
@@ -67,8 +68,6 @@ def bench_vector(env, physics: str, batch: int, seconds: float, seed: int, threa
 def _bench_rollout(env, batch: int, seconds: float, seed: int, threads: int) -> dict:
     """Control steps per second of bare native physics: the task's model and spawns, random PD targets,
     `n_substeps` substeps per control step, nothing else."""
-    from legged.envs.native import NativeEnvs
-
     native = NativeEnvs(env, batch, threads)
     state = native.reset(jax.random.split(jax.random.PRNGKey(seed), batch))
     ctrls = [np.asarray(native.controls(state, a)) for a in _random_actions(env, batch, seed)]
@@ -88,8 +87,6 @@ def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0
     learner's view against the script), compile_s, and the ratios to MJX and to bare rollout physics measured in
     the same run. `randomize`: the task's default config, or its domain randomisation `on` or `off` (each record
     with it on gets `ratio_vs_off` where both ran)."""
-    from legged.envs.native import check_threads
-
     entry = task_entry(task)
     for p in physics:
         if p not in PHYSICS_CHOICES:

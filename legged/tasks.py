@@ -34,13 +34,13 @@ def _soccer(config: SoccerConfig):
 
 
 def _walk_skill(config):
-    from legged.soccer.skills import WalkSkillEnv
+    from legged.soccer.skills import WalkSkillEnv  # imported on use, as the soccer env it builds on
 
     return WalkSkillEnv(config)
 
 
 def _getup_skill(config):
-    from legged.soccer.skills import GetUpSkillEnv
+    from legged.soccer.skills import GetUpSkillEnv  # imported on use, as the soccer env it builds on
 
     return GetUpSkillEnv(config)
 
@@ -158,7 +158,7 @@ def learner_env(entry: TaskEntry, env, activation: str = "elu", hidden: tuple[in
         if walker is not None:
             raise ValueError(f"a walker drives soccer players; {entry.name} is a {entry.kind} task")
         return env
-    from legged.soccer.learner import LearnerView
+    from legged.soccer.learner import LearnerView  # imported on use, as the soccer env (legged.soccer.env) it wraps
     from legged.soccer.opponents import OpponentNet
 
     return LearnerView(env, OpponentNet(activation), hidden, walker, teacher_prior)

@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import time
+
+import mujoco
 import numpy as np
 from tqdm import tqdm
 
 from legged.robots import GO1
 from legged.worlds.generator import generate_world
 from planners.body_planner import PlannerConfig, PlanningError, plan_path
+from planners.narrow_scenes import narrow_scenes
+from planners.scene_maps import maps_from_scene, reference_between
 from legged.worlds.maps import HeightMaps
 
 
@@ -68,13 +73,6 @@ PREVIOUS_PLANNER = PlannerConfig(planner="rrtconnect", space="full")
 def bench_narrow(configs: dict[str, PlannerConfig], resolution: float = 0.025, progress: bool = True) -> dict:
     """Plan every scene of planners.narrow_scenes with each named planner config; one record per (scene,
     config) with its wall-clock time (simplification included, map sampling excluded), plus a summary."""
-    import time
-
-    import mujoco
-
-    from planners.narrow_scenes import narrow_scenes
-    from planners.scene_maps import maps_from_scene, reference_between
-
     records = []
     for scene in tqdm(narrow_scenes(GO1), desc="narrow scenes", unit="scene", disable=not progress):
         model = mujoco.MjModel.from_xml_string(scene.xml)

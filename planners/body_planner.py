@@ -26,6 +26,7 @@ from legged.robots import GO1
 from legged.robots.spec import RobotSpec
 from planners.body_check import BodyCheckConfig, BodyChecker
 from planners.box_space import BoxSpace
+from planners.lattice import lattice_path, shortcut
 from planners.pose_band import ProjectedSpace
 from legged.worlds.maps import HeightMaps
 
@@ -317,8 +318,6 @@ def _ompl_plan(space, checker, start_pose, goal_pose, config: PlannerConfig, max
     path = setup.getSolutionPath()
     vertices = np.array([_values(path.getState(i), space.dim) for i in range(path.getStateCount())])
     if config.simplify and space.dim != 6:  # greedy shortcuts: far fewer (costlier) checks than OMPL's smoothing
-        from planners.lattice import shortcut
-
         exact = lambda a, b: bool(motions.checkMotion_values(a, b))
         vertices = shortcut(vertices, exact, exact)
     return _finish(vertices, space, checker, start_pose, goal_pose, config, plan_time, name)
@@ -334,8 +333,6 @@ def _walls_note(checker: BodyChecker) -> str:
 
 
 def _lattice_plan(space, checker, start_pose, goal_pose, config: PlannerConfig) -> Plan:
-    from planners.lattice import lattice_path
-
     began = time.perf_counter()
     vertices = lattice_path(space, checker, start_pose, goal_pose, config.check_step, config.angle_weight)
     if vertices is None:

@@ -1,0 +1,13 @@
+"""Training, evaluation and deployment of policies, in layers (docs/layout.md lists the modules of each; a module
+imports only its own layer and the ones before it, tests/test_layers.py):
+
+    run files      config_io, config, run_dir, distributed
+    checkpoints    checkpoints (the data-only formats)
+    models         algorithms, latent_models, memory_models, hib, teacher_kl, students, warm_start, probe, selfplay,
+                   brax_networks
+    policy loading policy_io
+    environments   environments, rsl_vecenv, steered
+    backends       rsl_backend, brax_backend
+    orchestration  training, distill, evaluate, eval_report, drill, navigate, nav_bench, export, convert, average,
+                   tables, plots, bench_encoder
+"""

@@ -9,7 +9,7 @@ read, which model classes it builds, and which loss it adds.
 | hib-no-ib  | as hib                                      | MLP on privileged_state      | PPO                   |
 | history    | head on (state, enc(history))               | head on (state, enc(history)) | PPO                  |
 | dagger     | head on (state, enc(history))               | the teacher's actor          | behaviour cloning     |
-| rma        | teacher's head on (state, enc(history))     | the teacher's actor          | z regression (policies.distill) |
+| rma        | teacher's head on (state, enc(history))     | the teacher's actor          | z regression (policies.students) |
 | kl         | CNN + MLP on (state, camera)                | MLP on privileged_state      | PPO + KL to a state teacher (policies.teacher_kl) |
 
 A dagger or kl vision student with `distill.student_memory` has a GRU between its features and its head
@@ -30,12 +30,19 @@ import math
 import torch
 from rsl_rl.algorithms import PPO
 from rsl_rl.models import MLPModel
+from rsl_rl.utils import resolve_class
 from tensordict import TensorDict
 
 from legged.envs.api import layout_slices
+from legged.soccer.learner import label_groups
+from legged.soccer.walker import COMMAND_SIZE
 from policies.config import HISTORY_ALGOS, PPOConfig, TrainConfig
 from policies.distributed import Launch
+from policies.hib import InformationBottleneck
 from policies.latent_models import NOISE_GROUP, LatentActor
+from policies.memory_models import MemoryCNNModel
+from policies.students import LatentRegression, MixedDAgger
+from policies.teacher_kl import TeacherKL
 
 CAMERA_CNN = {"output_channels": [16, 32, 32], "kernel_size": [5, 3, 3], "stride": [2, 2, 2], "padding": "zeros",
               "activation": "elu", "global_pool": "none", "flatten": True}
@@ -79,8 +86,6 @@ def actor_model(config: TrainConfig, std: float, camera: bool = False) -> dict:
     ppo, lat, algo = config.ppo, config.latent, config.algo
     base = _mlp(ppo.actor_hidden, ppo.activation, ppo.obs_normalization, std, camera)
     if camera and algo in ("dagger", "kl") and config.distill.student_memory:
-        from policies.memory_models import MemoryCNNModel
-
         base.update(class_name=MemoryCNNModel, memory_dim=config.distill.student_memory)
     if algo in ("teacher",) + HISTORY_ALGOS and not camera:
         base.update(_latent(lat), gaussian=algo in ("hib", "hib-no-ib"),
@@ -166,8 +171,6 @@ class WorldLabeller(MLPModel):
 def teacher_model(teacher: TrainConfig, student: TrainConfig | None = None) -> dict:
     """rsl-rl model config of a distillation's teacher: the `teacher` run's actor (for a state player with
     command_prior: a PriorCorrector, or a WorldLabeller when its `student` estimates the world)."""
-    from legged.soccer.walker import COMMAND_SIZE
-
     cfg = actor_model(teacher, teacher.ppo.init_noise_std)
     if teacher.command_prior and student is not None and student.estimates_world:
         cfg.update(class_name=WorldLabeller, corrections=COMMAND_SIZE, margin=student.distill.correction_margin)
@@ -180,8 +183,6 @@ def weighted_labels(config: TrainConfig) -> dict:
     """MixedDAgger's `label_groups` (name -> [start, stop)) and `label_weights` (one per action) for a student
     that estimates the game (none for others): `distill.label_weights`, else 1, and 0 for the opponents in the
     empty-goal drill (there are none to estimate; the parked robot would teach it a wrong place)."""
-    from legged.soccer.learner import label_groups
-
     if not config.estimates_world:
         return {}
     groups, weights = label_groups(config.env.scene.players_per_team), []
@@ -196,8 +197,6 @@ def weighted_labels(config: TrainConfig) -> dict:
 def distill_train_cfg(config: TrainConfig, teacher: TrainConfig, multi_gpu: dict | None = None,
                       camera: bool = False) -> dict:
     """rsl-rl's train_cfg of a distillation (dagger, rma) from the `teacher` run's config."""
-    from policies.distill import LatentRegression, MixedDAgger
-
     d = config.distill
     student = actor_model(config, d.student_noise_std, camera)
     if config.algo == "rma":  # the teacher's head and latent size, a history encoder of the student's own
@@ -216,6 +215,12 @@ def distill_train_cfg(config: TrainConfig, teacher: TrainConfig, multi_gpu: dict
         "num_steps_per_env": config.ppo.num_steps_per_env,
         "multi_gpu": multi_gpu,
     }
+
+
+def dummy_observations(obs_sizes: dict, num_envs: int = 1) -> TensorDict:
+    """Zero observations of the given sizes (to build networks without an environment)."""
+    shape = lambda n: (n,) if isinstance(n, int) else tuple(n)
+    return TensorDict({k: torch.zeros(num_envs, *shape(n)) for k, n in obs_sizes.items()}, batch_size=[num_envs])
 
 
 class _Shapes:
@@ -267,12 +272,8 @@ def attach_teacher_kl(alg: PPO, config: TrainConfig, teacher: TrainConfig, paylo
                       num_actions: int, iteration: int) -> None:
     """Give a kl student's PPO its pull towards the frozen teacher (policies.teacher_kl), the teacher's actor
     rebuilt from its config and loaded from its checkpoint `payload`, with as many outputs as the student's
-    `num_actions` (policies.distill.load_teacher checked them: the teacher's, and for a student that estimates
+    `num_actions` (policies.students.load_teacher checked them: the teacher's, and for a student that estimates
     the game, a WorldLabeller's, the game features after them)."""
-    from rsl_rl.utils import resolve_class
-
-    from policies.teacher_kl import TeacherKL
-
     cls, kwargs = resolve_class(teacher_model(teacher, config))
     model = cls(obs, {"teacher": teacher_inputs(teacher)}, "teacher", num_actions, **kwargs)
     model.load_state_dict(payload["alg"]["actor_state_dict"], strict=True)
@@ -283,8 +284,6 @@ def attach_teacher_kl(alg: PPO, config: TrainConfig, teacher: TrainConfig, paylo
 
 def attach_information_bottleneck(alg: PPO, config: TrainConfig, layout: dict, seed: int) -> None:
     """Give a hib / hib-no-ib PPO its information-bottleneck loss (policies.hib)."""
-    from policies.hib import InformationBottleneck
-
     lat = config.latent
     alg.symmetry = InformationBottleneck(lat.kl_weight, lat.infonce_weight, lat.temperature, lat.infonce_samples,
                                          privileged_slices(layout), ib=config.algo == "hib", seed=seed)

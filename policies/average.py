@@ -20,6 +20,7 @@ from pathlib import Path
 
 import torch
 
+from policies.checkpoints import load_rsl_checkpoint
 from policies.config import to_dict
 from policies.run_dir import RunDir, RunDirError
 
@@ -77,8 +78,6 @@ def _fix_normalisers(state: dict) -> None:
 
 def average_checkpoints(sources: list[str | Path], out: str | Path, weights: list[float] | None = None) -> dict:
     """Write the weighted mean of the sources' learners as a new run at `out`; a report of what was averaged."""
-    from policies.rsl_backend import load_checkpoint
-
     if len(sources) < 2:
         raise ValueError(f"averaging needs at least two sources, got {len(sources)}")
     weights = [1.0] * len(sources) if weights is None else [float(w) for w in weights]
@@ -101,7 +100,7 @@ def average_checkpoints(sources: list[str | Path], out: str | Path, weights: lis
     target = RunDir(out)
     if target.config_path.exists():  # before any checkpoint is read
         raise RunDirError(f"{target.path} already holds a run; choose another --out")
-    payloads = [load_checkpoint(path) for _, path in resolved]
+    payloads = [load_rsl_checkpoint(path) for _, path in resolved]
     for key in ("obs_sizes", "num_actions"):
         if any(p[key] != payloads[0][key] for p in payloads):
             raise RunDirError(f"the checkpoints differ in {key}: {[p[key] for p in payloads]}")
@@ -133,5 +132,5 @@ def average_checkpoints(sources: list[str | Path], out: str | Path, weights: lis
     torch.save(payload, buffer)
     checkpoint = target.write_checkpoint(step, "pt", buffer.getvalue())
     (target.path / "averaged_from.json").write_text(json.dumps(record, indent=2) + "\n")
-    load_checkpoint(checkpoint)  # it reads back with the safe loader
+    load_rsl_checkpoint(checkpoint)  # it reads back with the safe loader
     return dict(record, run=str(target.path), checkpoint=str(checkpoint))

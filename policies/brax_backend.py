@@ -16,25 +16,23 @@ and a resumed run starts from them instead of fresh ones.
 from __future__ import annotations
 
 import contextlib
-import functools
-import io
-import json
 import math
 import time
-from pathlib import Path
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 from brax.envs.base import Env, State, Wrapper
 from brax.envs.wrappers.training import EpisodeWrapper, VmapWrapper
-from brax.training.agents.ppo import networks as ppo_networks
 from brax.training.agents.ppo import train as brax_ppo
 from tqdm import tqdm
 
-from legged.envs.vector import select_envs
+from legged.envs.physics import select_envs
+from policies.brax_networks import network_factory, params_template
+from policies.checkpoints import (BRAX_SUFFIX as CHECKPOINT_SUFFIX, encode_brax_checkpoint as encode_checkpoint, fill,
+                                  load_brax_checkpoint as load_checkpoint)
 from policies.config import ConfigError, TrainConfig
-from policies.run_dir import RunDir, RunDirError, TrainingDiverged, check_compatible
+from policies.run_dir import RunDir, TrainingDiverged, check_compatible
 
 
 def check_devices(config: TrainConfig) -> None:
@@ -105,74 +103,6 @@ def wrap_for_training(env, episode_length: int, action_repeat: int, randomizatio
     if randomization_fn is not None:
         raise ConfigError("Brax's randomization_fn is not used: the environments randomise themselves")
     return FullResetWrapper(VmapWrapper(EpisodeWrapper(env, episode_length, action_repeat)))
-
-
-def network_factory(config: TrainConfig):
-    """Brax PPO networks: the policy reads `state`, the value function `privileged_state`."""
-    return functools.partial(
-        ppo_networks.make_ppo_networks, policy_hidden_layer_sizes=tuple(config.ppo.actor_hidden),
-        value_hidden_layer_sizes=tuple(config.ppo.critic_hidden), policy_obs_key="state",
-        value_obs_key="privileged_state")
-
-
-CHECKPOINT_SUFFIX = "npz"
-"""Brax checkpoints are .npz files of arrays (numpy.load with allow_pickle=False never runs code)."""
-
-
-def encode_checkpoint(meta: dict, params, optimizer_state=None) -> bytes:
-    """A data-only checkpoint: the leaves of `params` ((normalizer, policy, value)) and of the optimiser
-    state as arrays, `meta` (step, obs_sizes, num_actions, ...) as JSON text. The tree structures are not
-    stored: loaders rebuild them from the run's config (`params_template`) or from Brax's fresh state."""
-    arrays = {f"params_{i:05d}": np.asarray(x) for i, x in enumerate(jax.tree_util.tree_leaves(params))}
-    if optimizer_state is not None:
-        arrays.update({f"optimizer_{i:05d}": np.asarray(x)
-                       for i, x in enumerate(jax.tree_util.tree_leaves(optimizer_state))})
-    arrays["meta"] = np.array(json.dumps({"backend": "brax", **meta}))
-    buffer = io.BytesIO()
-    np.savez(buffer, **arrays)
-    return buffer.getvalue()
-
-
-def load_checkpoint(path) -> dict:
-    """A Brax checkpoint of this project as data: its meta entries plus `params_leaves` and
-    `optimizer_leaves` (lists of arrays); RunDirError naming the file if it is damaged or foreign."""
-    path = Path(path)
-    if path.suffix == ".pkl":
-        raise RunDirError(f"{path} is a pickled checkpoint of an earlier version of legged; pickles can run code "
-                          "when loaded, so legged no longer reads them. If you trust the file, convert its run "
-                          f"once with: legged convert-checkpoints {path.parent.parent} --trust-pickles")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            meta = json.loads(str(z["meta"]))
-            leaves = lambda prefix: [z[k] for k in sorted(n for n in z.files if n.startswith(prefix))]
-            payload = dict(meta, params_leaves=leaves("params_"), optimizer_leaves=leaves("optimizer_") or None)
-    except Exception as exc:
-        raise RunDirError(f"checkpoint {path} cannot be read: {exc}") from None
-    if payload.get("backend") != "brax":
-        raise RunDirError(f"{path} is not a Brax checkpoint of this project")
-    payload["obs_sizes"] = {k: v if isinstance(v, int) else tuple(v) for k, v in payload["obs_sizes"].items()}
-    return payload
-
-
-def params_template(config: TrainConfig, obs_sizes: dict, num_actions: int):
-    """(normalizer, policy, value) parameters of freshly built networks: the structure checkpoints fill."""
-    from brax.training.acme import running_statistics, specs
-
-    networks = network_factory(config)(obs_sizes, num_actions, preprocess_observations_fn=running_statistics.normalize)
-    key_policy, key_value = jax.random.split(jax.random.PRNGKey(0))
-    shapes = {k: specs.Array((v,), jnp.dtype("float32")) for k, v in obs_sizes.items()}
-    return (running_statistics.init_state(shapes), networks.policy_network.init(key_policy),
-            networks.value_network.init(key_value))
-
-
-def fill(template, leaves: list, what: str, path):
-    """`template`'s tree with `leaves` (checked one by one); RunDirError naming `what` if they do not fit."""
-    expected = jax.tree_util.tree_leaves(template)
-    if len(expected) != len(leaves) or any(np.shape(a) != np.shape(b) for a, b in zip(expected, leaves)):
-        raise RunDirError(f"{path}: the saved {what} ({len(leaves)} arrays) do not fit this run's networks "
-                          f"({len(expected)} arrays); was it written with other layer sizes?")
-    return jax.tree_util.tree_unflatten(jax.tree_util.tree_structure(template),
-                                        [np.asarray(b, np.asarray(a).dtype) for a, b in zip(expected, leaves)])
 
 
 class OptimizerStateTap:

@@ -8,6 +8,7 @@ from typing import Any, Literal
 
 import yaml
 
+from legged.soccer.learner import label_groups
 from legged.tasks import default_config, task_entry
 from policies.config_io import ConfigError, from_dict, to_dict
 
@@ -392,8 +393,6 @@ def _check_drill(cfg: TrainConfig, entry) -> None:
 
 def _check_label_weights(cfg: TrainConfig) -> None:
     """ConfigError unless `distill.label_weights` names label groups of this student with weights >= 0."""
-    from legged.soccer.learner import label_groups
-
     if not cfg.estimates_world or cfg.algo != "dagger":
         raise ConfigError("distill.label_weights weighs the labels of a dagger student that estimates the game "
                           "(legged distill ... --task soccer-1v1-vision --method dagger --set command_prior=placo)")

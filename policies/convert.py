@@ -13,19 +13,20 @@ from pathlib import Path
 
 import torch
 
+from policies.brax_networks import params_template
+from policies.checkpoints import (BRAX_SUFFIX, as_tensors, encode_brax_checkpoint, fill, load_brax_checkpoint,
+                                  load_rsl_checkpoint)
 from policies.run_dir import RunDir, RunDirError
 
 
 def _convert_brax(run: RunDir, path: Path) -> Path:
-    from policies.brax_backend import CHECKPOINT_SUFFIX, encode_checkpoint, fill, load_checkpoint, params_template
-
     with open(path, "rb") as f:
         old = pickle.load(f)  # trusted by the user (--trust-pickles)
     meta = {"step": int(old["step"]), "obs_sizes": old["obs_sizes"], "num_actions": int(old["num_actions"]),
             "task": run.load_config().task}
-    new = run.write_checkpoint(meta["step"], CHECKPOINT_SUFFIX,
-                               encode_checkpoint(meta, old["params"], old.get("optimizer_state")))
-    payload = load_checkpoint(new)
+    new = run.write_checkpoint(meta["step"], BRAX_SUFFIX,
+                               encode_brax_checkpoint(meta, old["params"], old.get("optimizer_state")))
+    payload = load_brax_checkpoint(new)
     fill(params_template(run.load_config(), payload["obs_sizes"], payload["num_actions"]), payload["params_leaves"],
          "parameters", new)
     path.unlink()
@@ -33,16 +34,14 @@ def _convert_brax(run: RunDir, path: Path) -> Path:
 
 
 def _convert_rsl(run: RunDir, path: Path) -> Path:
-    from policies.rsl_backend import _as_tensors, load_checkpoint
-
     old = torch.load(path, map_location="cpu", weights_only=False)  # trusted by the user (--trust-pickles)
     if "opponent_pool" in old:
-        old["opponent_pool"] = _as_tensors(old["opponent_pool"])
+        old["opponent_pool"] = as_tensors(old["opponent_pool"])
     buffer = io.BytesIO()
     torch.save(old, buffer)
     step = int(old["step"])
     new = run.write_checkpoint(step, "pt", buffer.getvalue())
-    load_checkpoint(new)
+    load_rsl_checkpoint(new)
     return new
 
 
@@ -51,10 +50,8 @@ def needs_conversion(path: Path) -> bool:
     if path.suffix == ".pkl":
         return True
     if path.suffix == ".pt":
-        from policies.rsl_backend import load_checkpoint
-
         try:
-            load_checkpoint(path)
+            load_rsl_checkpoint(path)
         except RunDirError as exc:
             return "beyond tensors" in str(exc)
     return False

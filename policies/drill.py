@@ -7,11 +7,19 @@ import dataclasses
 
 import numpy as np
 
+from legged.robots import OP3
+from legged.robots.models import checked_model
+from legged.robots.op3 import OP3_CTRL_DT
+from legged.soccer import skills
 from legged.soccer.drills import DrillConfig, DrillEnv
 from legged.soccer.skill_config import GetUpConfig
 from legged.soccer.task_config import SoccerConfig
-from policies.evaluate import estimate_errors, evaluate, steer_with_pilot
+from legged.tasks import task_entry
+from policies.environments import steer_with_pilot
+from policies.evaluate import estimate_errors, evaluate
 from policies.policy_io import GETUP_SCRIPT as SCRIPT  # `--player script`: the get-up script open loop
+from policies.policy_io import load_policy, load_walker
+from policies.run_dir import RunDir, check_policy
 
 SKILL_DRILLS = {"op3-walk": "walk", "op3-getup": "getup"}
 """Skill tasks (legged.soccer.skills) and the drill each plays, in its own observations."""
@@ -42,9 +50,6 @@ def check_player(spec: str, drill: DrillConfig) -> None:
         if drill.name != "getup":
             raise ValueError(f"--player script plays ROBOTIS' scripted get-up: the getup drill only, not {drill.name}")
         return
-    from legged.tasks import task_entry
-    from policies.run_dir import RunDir
-
     config = RunDir(spec).load_config()  # RunDirError naming the path if it is not a run
     if config.task in SKILL_DRILLS:
         if drill.name != SKILL_DRILLS[config.task]:
@@ -69,9 +74,6 @@ def drill_player(spec: str, env: DrillEnv, checkpoint: str | None = None):
     checkpoint, or `checkpoint`) plays agent 0."""
     if spec in ("placo", SCRIPT):
         return BuiltInPlayer(env.action_size)
-    from policies.policy_io import load_policy
-    from policies.run_dir import check_policy
-
     policy, _ = load_policy(spec, checkpoint)
     check_policy(policy, env)
     return policy
@@ -92,9 +94,6 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool, robot: str = "pr
     """The drill's environment for `player`: the drill itself (commanding the run's walker if it has one), or
     for a skill run (legged.soccer.skills) its task set up as the drill; the game's randomisation on or off; every
     robot on the OP3 model `robot` (project, menagerie or an MJCF path: legged.robots.models)."""
-    from legged.soccer import skills
-    from policies.run_dir import RunDir
-
     run = None if player in ("placo", SCRIPT) else RunDir(player).load_config()
     with_randomization = lambda config: dataclasses.replace(
         config, robot_model=robot, randomization=dataclasses.replace(config.randomization, enabled=randomize))
@@ -107,8 +106,6 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool, robot: str = "pr
         return skills.GetUpSkillEnv(with_randomization(dataclasses.replace(base, episode_seconds=drill.getup_seconds)))
     walker = None
     if run is not None and run.walker:  # a soccer player that commands a walking skill
-        from policies.policy_io import load_walker
-
         walker = load_walker(run.walker, run.getup, run.command_prior)
     game = SoccerConfig() if run is None else players_view(run.env)
     env = DrillEnv(drill, with_randomization(game), placo=player == "placo", walker=walker,
@@ -124,10 +121,6 @@ def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "
     """Run `episodes` episodes of drill `name` with `player` (a run: its newest checkpoint, or `checkpoint`),
     each `seconds` long (default: DrillConfig's), on the OP3 model `robot`; returns its figures (see
     legged.soccer.drills)."""
-    from legged.robots import OP3
-    from legged.robots.models import checked_model
-    from legged.robots.op3 import OP3_CTRL_DT
-
     lengths = {} if seconds is None else {"getup_seconds" if name == "getup" else "episode_seconds": seconds}
     drill = DrillConfig(name=name, **lengths)
     check_player(player, drill)

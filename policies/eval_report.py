@@ -6,8 +6,9 @@ from __future__ import annotations
 import dataclasses
 
 from legged.tasks import task_entry
+from policies.environments import build_env, soccer_opponent
 from policies.evaluate import (HELD_OUT_SEED_OFFSET, confined_eval_config, evaluate, held_out, latent_probe,
-                               nominal_config, on_robot, ood_config, paired_goal_ratio, robot_ratios, soccer_opponent,
+                               nominal_config, on_robot, ood_config, paired_goal_ratio, robot_ratios,
                                state_player_game, summarize)
 from policies.policy_io import load_policy
 from policies.run_dir import RunDir, check_policy
@@ -129,8 +130,6 @@ def check_request(request: EvalRequest, config) -> list[str]:
 
 def _evaluate_run(request: EvalRequest, config, policy) -> dict:
     """The figures of `policy` with the run config `config` (its robot model chosen)."""
-    from policies.training import build_env
-
     soccer = task_entry(config.task).kind == "soccer"
     report = {}
     if task_entry(config.task).kind != "confined":

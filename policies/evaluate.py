@@ -6,12 +6,17 @@ import dataclasses
 
 import jax
 import numpy as np
+from scipy.stats import binomtest, norm
 from tqdm import tqdm
 
-from legged.tasks import task_entry
 from legged.envs.curriculum import level_carry
 from legged.envs.vector import VectorEnv
+from legged.robots.models import checked_model
+from legged.tasks import task_entry
+from policies.algorithms import privileged_slices
+from policies.environments import build_env, soccer_opponent, steer_with_pilot  # noqa: F401 (the last two: re-exports)
 from policies.policy_io import actor_observation
+from policies.probe import probe_r2
 
 HELD_OUT_SEED_OFFSET = 1_000_003
 """Evaluation worlds use world_seed + this: never the worlds the policy trained on."""
@@ -56,8 +61,6 @@ def on_robot(config, robot: str, physics: str | None = None):
     MJCF path; legged.robots.models), the model checked now (and that MJX runs it, for `physics` mjx); ValueError
     naming the cause. On a model other than the project's, the randomisation keeps that model's own joint and foot
     parameters (MODEL_RANGES off); the rest of it (masses, gains, latency, pushes, ...) stays as the run has it."""
-    from legged.robots.models import checked_model
-
     if robot in ("", "project"):
         return config
     if not task_entry(config.task).robot_models:
@@ -161,13 +164,12 @@ def paired_goal_ratio(goals, baseline_goals, resamples: int = 2000, seed: int = 
 
 
 def wilson_interval(successes: int, trials: int, z: float = 1.96) -> list[float]:
-    """95% Wilson score interval of a success rate (sound at 0 and at 100%, unlike the normal one)."""
+    """The Wilson score interval of a success rate at `z` standard errors (1.96: 95%), rounded to 4 decimals
+    (sound at 0 and at 100%, unlike the normal one); [0, 1] without trials."""
     if trials == 0:
         return [0.0, 1.0]
-    p = successes / trials
-    centre = (p + z * z / (2 * trials)) / (1 + z * z / trials)
-    half = z * np.sqrt(p * (1 - p) / trials + z * z / (4 * trials * trials)) / (1 + z * z / trials)
-    return [round(float(max(0.0, centre - half)), 4), round(float(min(1.0, centre + half)), 4)]
+    interval = binomtest(successes, trials).proportion_ci(confidence_level=1 - 2 * norm.sf(z), method="wilson")
+    return [round(float(interval.low), 4), round(float(interval.high), 4)]
 
 
 def confined_eval_config(env_config, difficulty: int, episodes: int, world_seed: int | None):
@@ -186,55 +188,10 @@ def one_tile_each(first: int, count: int, tiles: int) -> dict:
 def state_player_game(config):
     """The held-out game of the state soccer run with `config`, its features true (a pilot trained on estimate
     errors plays without them): what a student is compared with in the same games."""
-    from policies.training import build_env
-
     env = held_out(config.task, config.env)
     if getattr(env, "estimate_noise", None) is not None:
         env = dataclasses.replace(env, estimate_noise=dataclasses.replace(env.estimate_noise, enabled=False))
     return build_env(dataclasses.replace(config, env=env))
-
-
-def steer_with_pilot(env, pilot: str) -> None:
-    """Let the state soccer run `pilot` steer the vision student's view `env` from its estimate of the game
-    (TrainConfig.pilot); ValueError naming the run if it cannot."""
-    env.steer_with(soccer_opponent(pilot, env, role="pilot"), pilot)
-
-
-def soccer_opponent(spec: str, env, policy=None, role: str = "--opponent"):
-    """The `Opponent` that `--opponent` (or `--teammate`, or a vision student's pilot: `role`, for errors) names
-    for a soccer learner's view `env`: `placo` (walks and kicks), `scripted` (stands, head on the ball), `self`
-    (the evaluated `policy`) or a soccer run directory (its deterministic actor)."""
-    from legged.soccer.opponents import placo_opponent, scripted_opponent
-    from policies.selfplay import snapshot_rsl_actor
-
-    size = env.game.policy_state_size
-    if spec in ("placo", "scripted"):
-        return (placo_opponent if spec == "placo" else scripted_opponent)(size, env.player_action_size)
-    if spec == "self":
-        if policy is None or policy.backend != "rsl" or policy.inputs != ("state",):
-            raise ValueError("--teammate self needs an rsl-rl policy on the state features (a vision or Brax "
-                             "player cannot drive its teammate): name placo, scripted or a state run instead")
-        return snapshot_rsl_actor(policy.torch_module)
-    from policies.policy_io import load_policy
-    from policies.run_dir import RunDir
-
-    config = RunDir(spec).load_config()  # RunDirError naming the path if it is not a run
-    if task_entry(config.task).kind != "soccer" or config.backend != "rsl" or config.algo != "ppo":
-        raise ValueError(f"{role} {spec}: a soccer opponent is placo, scripted or an rsl-rl soccer run; this "
-                         f"run trained {config.task} with {config.backend}/{config.algo}")
-    if bool(config.walker) != (env.walker is not None):
-        mine = "commands a walker" if env.walker is not None else "drives its joints"
-        raise ValueError(f"{role} {spec}: the learner {mine}, the opponent run "
-                         f"{'commands a walker' if config.walker else 'drives its joints'}: both must do the same")
-    if bool(config.command_prior) != (env.walker is not None and env.walker.prior is not None):
-        raise ValueError(f"{role} {spec}: its commands are{'' if config.command_prior else ' not'} corrections "
-                         "to the placo player's (command_prior), the learner's are"
-                         f"{' not' if config.command_prior else ''}: both must do the same")
-    policy, _ = load_policy(spec)
-    if policy.inputs != ("state",) or policy.obs_sizes["state"] != size:
-        raise ValueError(f"{role} {spec}: its actor reads {policy.obs_sizes['state']} state features; the "
-                         f"opponents of this game read {size} (same team size, a state task)")
-    return snapshot_rsl_actor(policy.torch_module)
 
 
 def evaluate(env, policy, episodes: int, seed: int, physics: str = "mjx", num_envs: int = 16,
@@ -284,9 +241,6 @@ def evaluate(env, policy, episodes: int, seed: int, physics: str = "mjx", num_en
 def latent_probe(samples: list, layout: dict) -> float | None:
     """Linear-probe R^2 (policies.probe) from the policy's features to the randomised dynamics over the
     samples `evaluate` collected; None without samples or without randomisation."""
-    from policies.algorithms import privileged_slices
-    from policies.probe import probe_r2
-
     slices = privileged_slices(layout)
     if not samples or not slices:
         return None

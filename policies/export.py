@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from policies.policy_io import Policy
+from policies.policy_io import Policy, load_policy
 
 PARITY_ATOL = 1e-4
 """Largest action difference allowed between the ONNX model and the framework policy."""
@@ -103,8 +103,6 @@ def export_run(run_dir: str, checkpoint: str | None = None, out: str | Path | No
     """Export the policy of `run_dir` (its `checkpoint`, default its newest) with `export_onnx` to `out` (default
     RUN_DIR/policy.onnx); returns the check. A piloted vision student deploys as two networks, it estimates and
     the pilot steers: the pilot is exported beside it (<out>_pilot.onnx) and its check reported as `pilot`."""
-    from policies.policy_io import load_policy
-
     policy, config = load_policy(run_dir, checkpoint)
     out = Path(out or f"{run_dir}/policy.onnx")
     report = export_onnx(policy, out)

@@ -24,8 +24,9 @@ from legged.tasks import task_entry
 from legged.worlds.maps import HeightMaps
 from legged.worlds.terrain import Terrain
 from planners.body_planner import PlannerConfig, PlanningError, plan_path, replan
+from policies.evaluate import on_robot
 from policies.policy_io import actor_observation, load_policy
-from policies.run_dir import RunDirError, check_policy
+from policies.run_dir import RunDir, RunDirError, check_policy
 
 PATH_CAPACITY = 256
 """Most waypoints a (re)planned path may have in a navigation episode."""
@@ -89,9 +90,6 @@ def terrain_of(maps: HeightMaps, start, goal) -> Terrain:
 def load_follower(run_dir, robot: str = "project", physics: str | None = None):
     """(policy, run config with the `robot` model) of a waypoint follower; NavigationError if the run learned
     another task, RobotModelError if the model cannot be used (in `physics`)."""
-    from policies.evaluate import on_robot
-    from policies.run_dir import RunDir
-
     config = RunDir(run_dir).load_config()  # the task is checked before any checkpoint is read
     entry = task_entry(config.task)
     if entry.kind != "confined" or getattr(config.env, "mode", "") == "goal":

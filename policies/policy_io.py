@@ -9,9 +9,24 @@ from typing import Callable
 import jax
 import numpy as np
 import torch
+from brax.training.acme import running_statistics
+from brax.training.agents.ppo import networks as ppo_networks
+from rsl_rl.utils import resolve_class
 
+from legged.robots.op3 import OP3
+from legged.soccer.gait_table import load_gait_table
+from legged.soccer.getup_motion import getup_motion
+from legged.soccer.opponents import OpponentNet
+from legged.soccer.placo_player import load_tables
+from legged.soccer.walker import Walker
+from legged.tasks import task_entry
+from policies.algorithms import actor_inputs, actor_model, dummy_observations
+from policies.brax_networks import network_factory, params_template
+from policies.checkpoints import fill, load_brax_checkpoint, load_rsl_checkpoint
 from policies.config import TrainConfig
+from policies.latent_models import deployed_actor, deployed_features
 from policies.run_dir import RunDir, RunDirError
+from policies.selfplay import snapshot_rsl_actor
 
 GETUP_SCRIPT = "script"
 """`getup=script`: soccer players get up by ROBOTIS' scripted get-up alone (legged.soccer.getup_motion)."""
@@ -63,11 +78,6 @@ def _tensor(x, dtype=np.float32) -> torch.Tensor:
 
 def build_actor(config: TrainConfig, obs_sizes: dict, num_actions: int):
     """The rsl-rl actor model of a run's algorithm (for distillations: its student), untrained."""
-    from rsl_rl.utils import resolve_class
-
-    from policies.algorithms import actor_inputs, actor_model
-    from policies.rsl_backend import dummy_observations
-
     obs = dummy_observations(obs_sizes)
     camera = "camera" in obs_sizes
     cls, kwargs = resolve_class(actor_model(config, config.ppo.init_noise_std, camera))
@@ -100,8 +110,6 @@ def action_bound(config: TrainConfig) -> float | None:
     soccer player commanding a walker, the command's [-1, 1], or for corrections added to the placo player's command
     1 + the largest the placo command can be (the walker clips the sum to [-1, 1], so a larger correction changes
     nothing: `prior_reach`); None for a vision student whose actions also hold its estimate of the game (positions)."""
-    from legged.tasks import task_entry
-
     entry = task_entry(config.task)
     if not entry.bounded_actions:
         return None
@@ -115,8 +123,6 @@ def action_bound(config: TrainConfig) -> float | None:
 def prior_reach(walker: str) -> float:
     """The largest |commanding action| of the placo player's command for the walker of run `walker`: placo's request
     lies in its gait table's command grid, mapped onto the walker's command range."""
-    from legged.soccer.gait_table import load_gait_table
-
     table, env = load_gait_table(xp=np), RunDir(walker).load_config().env
     low, high = np.asarray(env.command_low, float), np.asarray(env.command_high, float)
     ends = [2.0 * (np.asarray(v, float) - low) / (high - low) - 1.0 for v in (table.command_low, table.command_high)]
@@ -124,11 +130,7 @@ def prior_reach(walker: str) -> float:
 
 
 def _rsl_policy(config: TrainConfig, path: Path) -> Policy:
-    from policies.algorithms import actor_inputs
-    from policies.latent_models import deployed_actor, deployed_features
-    from policies.rsl_backend import load_checkpoint
-
-    payload = load_checkpoint(path)
+    payload = load_rsl_checkpoint(path)
     actor = build_actor(config, payload["obs_sizes"], payload["num_actions"])
     key = "student_state_dict" if config.algo in ("dagger", "rma") else "actor_state_dict"
     actor.load_state_dict(payload["alg"][key], strict=True)
@@ -183,12 +185,7 @@ def _recurrent_policy(module, payload: dict, path: Path, inputs: tuple[str, ...]
 
 
 def _brax_policy(config: TrainConfig, path: Path) -> Policy:
-    from brax.training.acme import running_statistics
-    from brax.training.agents.ppo import networks as ppo_networks
-
-    from policies.brax_backend import fill, load_checkpoint, network_factory, params_template
-
-    payload = load_checkpoint(path)
+    payload = load_brax_checkpoint(path)
     sizes = payload["obs_sizes"]
     networks = network_factory(config)(sizes, payload["num_actions"],
                                        preprocess_observations_fn=running_statistics.normalize)
@@ -232,12 +229,6 @@ def load_walker(run_dir: str | Path, getup: str | Path = "", prior: str = ""):
     command velocities, with a get-up skill when `getup` names one: `script` (ROBOTIS' scripted get-up alone)
     or an op3-getup run, and with `prior` `placo` the players' actions corrections to the placo player's
     command; ValueError naming what is wrong when a run is not what it should be."""
-    from legged.soccer.gait_table import load_gait_table
-    from legged.soccer.getup_motion import getup_motion
-    from legged.soccer.opponents import OpponentNet
-    from legged.soccer.walker import Walker
-    from policies.selfplay import snapshot_rsl_actor
-
     config = RunDir(run_dir).load_config()  # RunDirError naming the path if it is not a run
     if config.task != "op3-walk" or config.backend != "rsl" or config.algo != "ppo":
         raise ValueError(f"walker {run_dir}: a walker is an op3-walk run trained with rsl/ppo; this run trained "
@@ -250,12 +241,8 @@ def load_walker(run_dir: str | Path, getup: str | Path = "", prior: str = ""):
                              f"rsl/ppo; this run trained {getup_config.task} with {getup_config.backend}/"
                              f"{getup_config.algo}")
     policy, _ = load_policy(run_dir)
-    from legged.robots.op3 import OP3
-
     skill = {}
     if prior:
-        from legged.soccer.placo_player import load_tables
-
         skill["prior"] = load_tables()
     if getup:
         skill["getup_motion"] = getup_motion()

@@ -2,93 +2,40 @@
 
 from __future__ import annotations
 
-import io
 import math
-import pickle
 import time
-import warnings
-import zipfile
 from pathlib import Path
 
 import jax
 import numpy as np
 import torch
 from rsl_rl.algorithms import PPO, Distillation
-from tensordict import TensorDict
+from torch.utils.tensorboard import SummaryWriter
 from tqdm import tqdm
 
 from legged.envs.native import default_threads
 from legged.envs.vector import VectorEnv
 from legged.tasks import task_entry
-from policies.algorithms import (  # noqa: F401 (build_ppo: a re-export)
+from policies import selfplay  # the module: its functions are looked up when called (tests replace them)
+from policies.algorithms import (  # noqa: F401 (build_ppo, dummy_observations: re-exports)
     attach_information_bottleneck,
     attach_teacher_kl,
     build_algorithm,
     build_ppo,
+    dummy_observations,
     privileged_slices,
 )
+from policies.checkpoints import load_rsl_checkpoint as load_checkpoint
+from policies.checkpoints import save_rsl_checkpoint as save_checkpoint
 from policies.config import DISTILL_ALGOS, TrainConfig
 from policies.distributed import Launch, init_torch_processes
+from policies.latent_models import latent_features
+from policies.probe import probe_r2
 from policies.rsl_vecenv import RslVecEnv
-from policies.run_dir import RunDir, RunDirError, TrainingDiverged, check_compatible
+from policies.run_dir import RunDir, TrainingDiverged, check_compatible
 from policies.steered import SteeredView
-
-
-def dummy_observations(obs_sizes: dict, num_envs: int = 1) -> TensorDict:
-    """Zero observations of the given sizes (to build networks without an environment)."""
-    shape = lambda n: (n,) if isinstance(n, int) else tuple(n)
-    return TensorDict({k: torch.zeros(num_envs, *shape(n)) for k, n in obs_sizes.items()}, batch_size=[num_envs])
-
-
-def load_checkpoint(path: Path) -> dict:
-    """A checkpoint written by `train_rsl`, read as data only (tensors, numbers, strings, lists and dicts:
-    `torch.load(weights_only=True)`, which never runs code from the file); RunDirError naming the file if it
-    is damaged, foreign, or holds anything else."""
-    if not zipfile.is_zipfile(path):
-        raise RunDirError(f"checkpoint {path} cannot be read: not a torch checkpoint (torch.save writes zip files)")
-    try:
-        with warnings.catch_warnings():  # torch warns about pickle protocols before it refuses them
-            warnings.simplefilter("ignore")
-            payload = torch.load(path, map_location="cpu", weights_only=True)
-    except pickle.UnpicklingError as exc:
-        lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
-        cause = next((line[line.index("Unsupported global"):].split(" was not")[0] for line in lines
-                      if "Unsupported global" in line), None)
-        if cause is None:  # not an object the safe loader refused: the file is damaged or not a checkpoint
-            reason = next((line for line in lines if "load key" in line or "truncated" in line), lines[-1] if lines else "")
-            raise RunDirError(f"checkpoint {path} cannot be read: {reason}") from None
-        raise RunDirError(f"checkpoint {path} holds Python objects beyond tensors and plain data, and is not "
-                          f"loaded (loading it could run code from it): {cause}. If you trust its run, convert it "
-                          f"once with: legged convert-checkpoints {path.parent.parent} --trust-pickles") from None
-    except Exception as exc:
-        raise RunDirError(f"checkpoint {path} cannot be read: {exc}") from None
-    if not isinstance(payload, dict) or payload.get("backend") != "rsl":
-        raise RunDirError(f"{path} is not an rsl-rl checkpoint of this project")
-    if "opponent_pool" in payload:
-        payload["opponent_pool"] = _as_numpy(payload["opponent_pool"])
-    return payload
-
-
-def _as_tensors(obj):
-    """numpy arrays inside nested dicts, lists and tuples as torch tensors (data-only checkpoints)."""
-    if isinstance(obj, np.ndarray):
-        return torch.from_numpy(np.ascontiguousarray(obj))
-    if isinstance(obj, dict):
-        return {k: _as_tensors(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return type(obj)(_as_tensors(v) for v in obj)
-    return obj
-
-
-def _as_numpy(obj):
-    """The inverse of `_as_tensors`."""
-    if isinstance(obj, torch.Tensor):
-        return obj.numpy()
-    if isinstance(obj, dict):
-        return {k: _as_numpy(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return type(obj)(_as_numpy(v) for v in obj)
-    return obj
+from policies.students import load_teacher, start_student
+from policies.warm_start import warm_start
 
 
 def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progress: bool = True) -> dict:
@@ -131,8 +78,6 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         venv.episode_length_buf = torch.randint(0, env.config.episode_steps, (local_envs,), generator=generator)
     teacher = None
     if config.algo in DISTILL_ALGOS:
-        from policies.distill import load_teacher
-
         teacher = load_teacher(config, env)
     alg = build_algorithm(config, venv.get_observations(), local_envs, env.action_size, device, launch,
                           teacher=None if teacher is None else teacher[0])
@@ -142,7 +87,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         attach_teacher_kl(alg, config, *teacher, venv.get_observations(), env.action_size, iteration)
     if payload is not None:
         alg.load(payload["alg"], None, strict=True)
-        if isinstance(alg, Distillation):  # its schedule (policies.distill.MixedDAgger) goes on, at the config's rate
+        if isinstance(alg, Distillation):  # its schedule (policies.students.MixedDAgger) goes on, at the config's rate
             alg.num_updates = iteration
             alg.learning_rate = config.distill.learning_rate
             for group in alg.optimizer.param_groups:
@@ -150,32 +95,22 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         if launch.is_main:
             torch.set_rng_state(payload["torch_rng"])
     elif teacher is not None:  # kl: a fresh student (or distill.student_init's), pulled towards its teacher
-        from policies.distill import start_student
-
         start_student(alg, config, *teacher)
     elif config.init_from:
-        from policies.warm_start import warm_start
-
         note = warm_start(alg, Path(config.init_from), env, venv.get_observations(), config.task)
         if progress and launch.is_main:
             print(note)
     pool = None
     if config.self_play:
-        from policies.selfplay import OpponentPool
-
-        pool = OpponentPool(config.selfplay, env.game.policy_state_size, env.player_action_size, ppo.actor_hidden,
-                            seed=config.seed + launch.rank + 7919 * iteration)
+        pool = selfplay.OpponentPool(config.selfplay, env.game.policy_state_size, env.player_action_size,
+                                     ppo.actor_hidden, seed=config.seed + launch.rank + 7919 * iteration)
         if payload is not None and "opponent_pool" in payload:
             pool.load_state_dict(payload["opponent_pool"])
     elif task_entry(config.task).kind == "soccer" and not config.drill:  # the configured script plays every game
-        from policies.selfplay import script_opponents
-
-        venv.env_args = script_opponents(config.selfplay, env.game.policy_state_size, env.player_action_size,
+        venv.env_args = selfplay.script_opponents(config.selfplay, env.game.policy_state_size, env.player_action_size,
                                          env.game.layout.players_per_team)
     if launch.distributed:
         alg.broadcast_parameters()  # every process starts from rank 0's networks
-    from torch.utils.tensorboard import SummaryWriter
-
     writer = SummaryWriter(str(run.path / "tb")) if launch.is_main else None
     record = {}
     bar = tqdm(total=iterations * per_iteration, initial=step, unit="step", unit_scale=True,
@@ -216,9 +151,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
             diverged = non_finite(losses, alg)
             iteration += 1
             if pool is not None and iteration % config.selfplay.snapshot_every == 0:
-                from policies.selfplay import snapshot_rsl_actor
-
-                pool.add(snapshot_rsl_actor(alg.get_policy()))
+                pool.add(selfplay.snapshot_rsl_actor(alg.get_policy()))
             step += per_iteration
             elapsed = time.perf_counter() - t0
             record = {"step": step, "iteration": iteration, "episode_return": None, "episode_length": None,
@@ -259,9 +192,6 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
 
 def probe_rollout(alg, layout: dict) -> dict:
     """The linear probe of the policy's latent (policies.probe) on the rollout just collected."""
-    from policies.latent_models import latent_features
-    from policies.probe import probe_r2
-
     steps, envs = alg.storage.observations.batch_size[:2]
     obs = alg.storage.observations.flatten(0, 1)
     features = latent_features(alg.get_policy(), obs)
@@ -284,18 +214,3 @@ def non_finite(losses: dict, alg) -> str:
 
 def _short(value) -> str:
     return "-" if value is None else f"{value:.2f}"
-
-
-def save_checkpoint(run: RunDir, alg, iteration: int, step: int, obs_sizes: dict, num_actions: int,
-                    opponent_pool: dict | None = None, curriculum_levels: np.ndarray | None = None) -> Path:
-    """Model, optimiser, counters, RNG state, (soccer self-play) the opponent pool and (terrain curricula)
-    each environment's level, written atomically."""
-    buffer = io.BytesIO()
-    payload = {"backend": "rsl", "alg": alg.save(), "iteration": iteration, "step": step, "obs_sizes": obs_sizes,
-               "num_actions": num_actions, "torch_rng": torch.get_rng_state()}
-    if opponent_pool is not None:
-        payload["opponent_pool"] = _as_tensors(opponent_pool)
-    if curriculum_levels is not None:
-        payload["curriculum_levels"] = torch.from_numpy(np.array(curriculum_levels))  # a writable copy
-    torch.save(payload, buffer)
-    return run.write_checkpoint(step, "pt", buffer.getvalue())

@@ -26,6 +26,8 @@ from tensordict import TensorDict
 from legged.soccer.observe import PROPRIO_SIZE, feature_layout
 from legged.soccer.walker import COMMAND_SIZE
 from policies.config import ConfigError, TrainConfig
+from policies.environments import build_env
+from policies.policy_io import load_policy
 from policies.rsl_vecenv import RslVecEnv, to_torch
 from policies.run_dir import RunDir
 
@@ -33,9 +35,6 @@ from policies.run_dir import RunDir
 def steered_env(config: TrainConfig) -> "SteeredView":
     """The training environment of a state soccer run with `steered_student`: the student's camera game as the
     learner's view, with the student loaded; ConfigError naming what does not fit, before anything compiles."""
-    from policies.policy_io import load_policy
-    from policies.training import build_env
-
     path = Path(config.steered_student)
     student = RunDir(path).load_config()  # RunDirError naming the path if it is not a run
     if not student.estimates_world or student.backend != "rsl":

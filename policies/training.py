@@ -5,41 +5,14 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+import jax
+
 from policies.config import ConfigError, TrainConfig, apply_overrides
+from policies.distributed import Launch, init_jax_processes
+from policies.environments import build_env  # looked up when a run starts: tests replace it with a small env
+from policies.rsl_backend import train_rsl
 from policies.run_dir import RunDir
-
-
-def build_env(config: TrainConfig, progress: bool = True):
-    """The run's environment as its registry entry says: confined tasks on traversable worlds with planned
-    waypoints; soccer tasks as the learner's view of the game (agent 0; the others driven by opponents
-    given to each step) or of `config.drill`, commanding `config.walker` when it names one."""
-    from legged.tasks import learner_env, make, task_entry
-
-    entry = task_entry(config.task)
-    walker = None
-    if config.walker:
-        from policies.policy_io import load_walker
-
-        walker = load_walker(config.walker, config.getup, config.command_prior)
-    if config.drill:  # one player on the pitch doing the drill, the other parked (no opponent to hand it)
-        from legged.soccer.drills import DrillConfig, DrillEnv
-
-        env = DrillEnv(DrillConfig(name=config.drill), config.env, walker=walker,
-                       teacher_prior=config.game_gives_placo_command)
-    else:
-        if entry.kind == "confined":
-            from planners import make_planned_env
-
-            game = make_planned_env(config.task, config=config.env, progress=progress)
-        else:
-            game = make(config.task, config.env)
-        env = learner_env(entry, game, config.ppo.activation, config.ppo.actor_hidden, walker,
-                          config.game_gives_placo_command)
-    if config.pilot:  # a game or a drill
-        from policies.evaluate import steer_with_pilot
-
-        steer_with_pilot(env, config.pilot)
-    return env
+from policies.steered import steered_env
 
 
 def refuse_pilot(config: TrainConfig) -> None:
@@ -54,14 +27,10 @@ def refuse_pilot(config: TrainConfig) -> None:
 
 def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> dict:
     if config.backend == "brax":
-        from policies.brax_backend import train_brax
+        from policies.brax_backend import train_brax  # Brax's PPO takes a second to import: brax runs only
 
         return train_brax(build_env(config), config, run, resume=resume, progress=progress)
-    from policies.rsl_backend import train_rsl
-
     if config.steered_student:  # a pilot, trained in its vision student's game (policies.steered)
-        from policies.steered import steered_env
-
         return train_rsl(steered_env(config), config, run, resume=resume, progress=progress)
     return train_rsl(build_env(config), config, run, resume=resume, progress=progress)
 
@@ -69,16 +38,11 @@ def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> di
 def _prepare(config: TrainConfig) -> bool:
     """Check the device split before anything is written; True in the process that writes the run."""
     if config.backend == "brax":
-        import jax
-
-        from policies.brax_backend import check_devices
-        from policies.distributed import init_jax_processes
+        from policies.brax_backend import check_devices  # Brax's PPO takes a second to import: brax runs only
 
         init_jax_processes()
         check_devices(config)
         return jax.process_index() == 0
-    from policies.distributed import Launch
-
     launch = Launch.from_env()
     launch.envs_per_process(config.num_envs)
     return launch.is_main

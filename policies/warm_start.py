@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from legged.tasks import make
+from policies.checkpoints import load_rsl_checkpoint
 from policies.run_dir import RunDir, RunDirError
 
 ALIASES = {"command/dx": "command/vx", "command/dy": "command/vy", "command/dyaw": "command/yaw_rate"}
@@ -77,8 +79,6 @@ def _rebuild(source: dict, target: dict, mapping: np.ndarray, fresh_mean: torch.
 
 def source_layout(run_path: Path) -> tuple[dict, Path]:
     """(observation layout, latest checkpoint) of a trained rsl run, without compiling its environment."""
-    from legged.tasks import make
-
     run = RunDir(Path(run_path))
     config = run.load_config()
     if config.backend != "rsl":
@@ -94,14 +94,12 @@ def same_task_start(alg, run_path: Path, task: str) -> str | None:
     """Load the latest actor and critic (normalisers and action noise included) of `run_path` into `alg` as they
     are, if that run trained `task` with rsl-rl on observations of the same sizes (a new run of the same task, e.g.
     with other rewards); None if it trained another task or other observations. Returns a summary."""
-    from policies.rsl_backend import load_checkpoint
-
     run = RunDir(Path(run_path))
     config = run.load_config()
     if config.task != task or config.backend != "rsl":
         return None
     path = run.latest_checkpoint()
-    saved = load_checkpoint(path)["alg"]
+    saved = load_rsl_checkpoint(path)["alg"]
     nets = ((alg.actor, "actor_state_dict"), (alg.critic, "critic_state_dict"))
     differ = {name for net, key in nets for name, value in net.state_dict().items()
               if name in saved[key] and saved[key][name].shape != value.shape}
@@ -121,15 +119,13 @@ def warm_start(alg, run_path: Path, env, obs, task: str = "") -> str:
     """Load `run_path`'s latest actor and critic into `alg` (rsl-rl PPO of `env`, training `task`): as they are
     if the source trained the same task, else through the observation layouts; `obs` is a first batch of
     observations (statistics of the new inputs). Returns a summary."""
-    from policies.rsl_backend import load_checkpoint
-
     same = same_task_start(alg, run_path, task)
     if same is not None:
         return same
     if not hasattr(env, "observation_layout"):
         raise RunDirError(f"cannot warm start this task ({type(env).__name__}): it has no named observation layout")
     layout, path = source_layout(run_path)
-    saved = load_checkpoint(path)["alg"]
+    saved = load_rsl_checkpoint(path)["alg"]
     target_layout = env.observation_layout()
     report = []
     for net, group, key in ((alg.actor, "state", "actor_state_dict"), (alg.critic, "privileged_state", "critic_state_dict")):

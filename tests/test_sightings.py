@@ -54,7 +54,7 @@ def test_a_student_whose_state_grew_starts_acting_as_its_source():
     """`distill.student_init_whole` from a student with a shorter state (e.g. before `env.vision_sightings`):
     the new entries reach the GRU and the head through zero weights, so the new student acts as the old one."""
     from policies.algorithms import CAMERA_CNN
-    from policies.distill import _grown_state
+    from policies.students import _grown_state
     from policies.memory_models import MemoryCNNModel
 
     def student(state: int, seed: int) -> MemoryCNNModel:

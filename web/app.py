@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import viser
 
+from policies.run_dir import RunDir
 from web.camera import DepthCamera, DepthCameraConfig
 from web.kinematics import Kinematics
 from web.overlays import OVERLAYS, Overlays
@@ -146,8 +147,6 @@ class Dashboard:
         self.curves = self.picker = None
         if self.run_dir is not None:
             with tabs.add_tab("Training", viser.Icon.TRENDING_UP):
-                from policies.run_dir import RunDir
-
                 self.curves = TrainingCurves(gui, RunDir(self.run_dir))
                 if self.source is not None:
                     self.picker = CheckpointPicker(gui, self.source.checkpoints, self._load_checkpoint,

@@ -14,7 +14,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from legged.envs.vector import select_envs
+from legged.envs.native import NativeEnvs
+from legged.envs.physics import select_envs
 from web.trajectory import Trajectory
 
 Act = Callable[[dict], np.ndarray]
@@ -54,8 +55,6 @@ class Recorder:
             hasattr(env, "tracked_points")  # where its tracker puts it (not in drills)
         self._tracked = jax.jit(jax.vmap(env.tracked_points)) if self.has_tracker else None
         if config.physics == "native":
-            from legged.envs.native import NativeEnvs
-
             native = NativeEnvs(env, config.num_envs, cameras=self.has_head_camera)
             extras, frozen = jax.jit(self._with_extras), jax.jit(self._frozen)
             self._reset = lambda keys: extras(native.reset(keys))

@@ -2,6 +2,8 @@
 
 Checks run cheapest first: numbers, the port, the trajectory file, the run directory and its config,
 the task name, the checkpoint; only then is the environment built (and compiled, on the first rollout).
+The task registry and policies (torch among them) are imported inside the functions that first need them, so
+that a wrong argument is answered before they load.
 """
 
 from __future__ import annotations
@@ -204,7 +206,7 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
         check_policy(policy, env)
     opponent = None
     if request.opponent is not None:
-        from policies.evaluate import soccer_opponent
+        from policies.environments import soccer_opponent
 
         opponent = (request.opponent, soccer_opponent(request.opponent, env))
     source = RolloutSource(env, task, RecorderConfig(num_envs=request.num_envs, physics=request.physics), policy,
@@ -257,7 +259,7 @@ def _build_env(task: str, config):
     """The environment a run trained on (soccer: the learner's view, scripted opponents; confined: planned
     worlds), else the task's default."""
     from policies.config import TrainConfig
-    from policies.training import build_env
+    from policies.environments import build_env
 
     return build_env(config if config is not None else TrainConfig(task=task).resolved(), progress=False)
 

@@ -18,7 +18,7 @@ import numpy as np
 from brax.envs.base import State
 from mujoco.batch import Batch, SimulationError
 
-from legged.envs.physics import CAMERA_FIELDS, PhysicsView, is_diverged
+from legged.envs.physics import CAMERA_FIELDS, PhysicsView, is_diverged, select_envs
 from legged.sensors.native_raycam import NativeRayCaster
 from legged.worlds.mjcf import CONTACT_SLOTS
 
@@ -151,8 +151,6 @@ class NativePhysics:
 @jax.jit
 def _select_rows(mask, fresh, state):
     """`fresh` where `mask` (num_envs,) is set, else `state`."""
-    from legged.envs.vector import select_envs
-
     return select_envs(mask, fresh, state)
 
 

@@ -110,6 +110,15 @@ def is_diverged(qpos, qvel, limit: float, xp=jnp):
     return ~(finite & xp.all(xp.abs(qvel) < limit, -1))
 
 
+def select_envs(mask, on_true, on_false):
+    """Per-environment choice between two batched pytrees: `on_true` where mask (n,) is set (both engines' resets
+    of finished environments)."""
+    def pick(a, b):
+        m = mask.reshape(mask.shape + (1,) * (a.ndim - 1))
+        return jnp.where(m, a, b)
+    return jax.tree_util.tree_map(pick, on_true, on_false)
+
+
 def reject_divergence(data, previous, limit: float):
     """(bad, data): `bad` when stepped MJX `data` diverged (is_diverged); `data` is then replaced by
     `previous`, the last good state, so that a diverged environment never spreads NaNs."""

@@ -14,6 +14,9 @@ import jax.numpy as jnp
 import numpy as np
 from brax.envs.base import State
 
+from legged.envs.native import NativeEnvs
+from legged.envs.physics import select_envs
+
 
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass
@@ -43,14 +46,6 @@ class StepResult:
     """Whether it ended only because of the time limit (for bootstrapping), shape (n,) bool."""
     finished: dict
     """For each episode statistic, its value for the episodes that ended here and 0 elsewhere, shape (n,)."""
-
-
-def select_envs(mask, on_true, on_false):
-    """Per-environment choice between two batched pytrees: `on_true` where mask (n,) is set."""
-    def pick(a, b):
-        m = mask.reshape(mask.shape + (1,) * (a.ndim - 1))
-        return jnp.where(m, a, b)
-    return jax.tree_util.tree_map(pick, on_true, on_false)
 
 
 def account(sums: dict, nxt: State) -> tuple[dict, dict, jax.Array, jax.Array]:
@@ -94,8 +89,6 @@ class VectorEnv:
         self._zero = jax.jit(self._zero_sums)
         self._account = jax.jit(account)
         if physics == "native":
-            from legged.envs.native import NativeEnvs
-
             self.native = NativeEnvs(env, num_envs, threads)
             self.reset, self.step = self._native_reset, self._native_step
         else:

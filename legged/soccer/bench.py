@@ -9,6 +9,9 @@ import sys
 import jax
 
 from legged.bench import bench_vector
+from legged.envs.native import check_threads
+from legged.soccer.learner import LearnerView
+from legged.soccer.peer_dm_control import measure_dm_control_soccer
 from legged.tasks import make
 
 TASK_OF_TEAM_SIZE = {1: "soccer-1v1", 2: "soccer-2v2"}
@@ -41,9 +44,6 @@ def bench_soccer(team_sizes=(1, 2), cameras=(False, True), batches=(1, 16), seco
     physics engine (with cameras under native physics, once per ray caster in `casters`), beside (with
     `peer`) dm_control's BoxHead soccer at the same team size and camera setting, measured once per setting
     on one env (its batch would be a Python loop over envs) and compared with every record."""
-    from legged.envs.native import check_threads
-    from legged.soccer.learner import LearnerView
-
     if peer_steps < 1:
         raise ValueError(f"peer_steps must be >= 1, got {peer_steps}")
     threads = check_threads(threads)
@@ -61,8 +61,6 @@ def bench_soccer(team_sizes=(1, 2), cameras=(False, True), batches=(1, 16), seco
             name = TASK_OF_TEAM_SIZE[team_size] + ("+camera" if camera else "")
             peer_record = None
             if peer:  # dm_control steps its envs one after another: one measurement serves every batch size
-                from legged.soccer.peer_dm_control import measure_dm_control_soccer
-
                 say(f"{name}: dm_control peer ({PEER_BATCH} env, {peer_steps} steps)")
                 cam_size = (game.config.camera.width, game.config.camera.height)
                 peer_record = measure_dm_control_soccer(team_size, camera, PEER_BATCH, steps=peer_steps,

@@ -238,7 +238,7 @@ def compare_table_to_solver(table: GaitTable | None = None, duration=20.0, chang
     difference of the servo targets (rad; whole run, and leg joints), and with `simulate` the same
     sequence walked open loop in native MuJoCo by both (distance, falls); with `grid_speeds` the speed
     the table achieves in MuJoCo for every grid command."""
-    from legged.soccer.placo_walk import PlacoWalk, PlacoWalkConfig
+    from legged.soccer.placo_walk import PlacoWalk, PlacoWalkConfig  # placo, the solver, loads for this comparison only
 
     table = table if table is not None else load_gait_table(xp=np)
     walk = PlacoWalk(config or PlacoWalkConfig())

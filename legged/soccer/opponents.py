@@ -19,6 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from legged.soccer.observe import PROPRIO_SIZE
+from legged.soccer.placo_player import actions_of, motion_step, request_from_features
 
 ACTIVATIONS = {"elu": jax.nn.elu, "relu": jax.nn.relu, "tanh": jnp.tanh, "swish": jax.nn.swish,
                "silu": jax.nn.silu, "selu": jax.nn.selu}
@@ -110,8 +111,6 @@ def opponent_actions(net: OpponentNet, opp: Opponent, obs, action_scale: float) 
 
 def placo_actions(tables, obs, memory, action_scale: float) -> tuple[jax.Array, jax.Array]:
     """(actions [n, 20], memories [n, MEMORY_SIZE]) of the placo player for robots' features [n, obs]."""
-    from legged.soccer.placo_player import actions_of, motion_step, request_from_features
-
     def one(features, row):
         targets, row = motion_step(tables, row, *request_from_features(tables, features))
         return actions_of(targets, tables.default_pose, action_scale), row

@@ -23,8 +23,10 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from legged.tasks import make
 from legged.envs.native import NativeEnvs
+from legged.soccer.opponents import placo_actions
+from legged.soccer.placo_player import load_tables
+from legged.tasks import make
 
 
 class SoccerParallelEnv(ParallelEnv):
@@ -47,9 +49,6 @@ class SoccerParallelEnv(ParallelEnv):
         self.possible_agents = [a for a in robots if a not in players]
         self._robots = robots
         if len(self.builtin):
-            from legged.soccer.opponents import placo_actions
-            from legged.soccer.placo_player import load_tables
-
             tables, size, scale = load_tables(), env.policy_state_size, env.robot.action_scale
             self._placo = jax.jit(lambda obs, memory: placo_actions(tables, obs[:, :size], memory, scale))
         self.agents: list[str] = []

@@ -183,7 +183,7 @@ def main(argv=None):
         print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB): targets {data['targets'].shape}, "
               f"period {float(data['period']):.3f} s, start {len(data['start'])}, stop {len(data['stop'])} samples")
     if args.compare:
-        from legged.soccer.op3_open_loop import compare_table_to_solver
+        from legged.soccer.op3_open_loop import compare_table_to_solver  # JAX and MuJoCo load for --compare only
 
         table = load_gait_table(args.out, xp=np)
         for mode in ("filter", "stride"):

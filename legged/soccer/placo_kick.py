@@ -36,6 +36,7 @@ from legged.robots.op3 import OP3
 from legged.soccer.kick_table import KICK_PATH, SIDES, load_kick_table
 from legged.soccer.npz_tables import save_arrays
 from legged.soccer.op3_mirror import mirror_joints, mirror_signs
+from legged.soccer.op3_open_loop import kick_ball_in_mujoco, walk_kick_walk_in_mujoco
 from legged.soccer.placo_walk import PlacoWalk, PlacoWalkConfig, servo_targets, split_static_torques, static_torques
 
 TOE_AHEAD = 0.0635
@@ -220,8 +221,6 @@ def build_kick_table(config: PlacoKickConfig = PlacoKickConfig(), walk_config: P
 
 def main(argv=None):
     """Build and save the kick table; optionally kick a ball with it in native MuJoCo."""
-    from legged.soccer.op3_open_loop import kick_ball_in_mujoco, walk_kick_walk_in_mujoco
-
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", default=str(KICK_PATH), help="output .npz")
     parser.add_argument("--test", action="store_true", help="kick a ball in native MuJoCo (both sides)")

@@ -22,6 +22,7 @@ from legged.sensors.raycam import (
     poses_of,
     render,
 )
+from legged.sensors.native_camera import NativeCamera
 from legged.sensors.native_raycam import render_anywhere
 from legged.soccer.layout import SoccerLayout
 
@@ -93,8 +94,6 @@ def native_images(model: mujoco.MjModel, data: mujoco.MjData, camera: RayCamera,
                   layout: SoccerLayout | None = None) -> dict:
     """MuJoCo's renderer through the same cameras at the same size: rgb, depth, geom, segmentation (classes from
     `layout`, default: the project's scene layout read from `model`)."""
-    from legged.sensors.native_camera import NativeCamera
-
     cfg = camera.config
     with NativeCamera(model, cfg.width, cfg.height) as native:
         shots = [native.render(data, int(c)) for c in camera.camera_ids]
