@@ -1,5 +1,5 @@
-"""The task registry, the top of the core (legged.envs and legged.soccer sit below it): what each task is,
-so that nothing else has to ask `isinstance`.
+"""The task registry, the top of the core (legged.envs, legged.soccer and legged.skills sit below it): what each
+task is, so that nothing else has to ask `isinstance`.
 
 `make("confined-waypoints")` builds a task's environment; `task_entry(name)` says what it is (robot, kind,
 physics engines and trainers it supports, whether its actor sees a camera); `learner_env(entry, env)` is
@@ -11,17 +11,16 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable, Literal
 
+from legged.envs.config import NoiseConfig
 from legged.envs.confined import ConfinedConfig, ConfinedEnv
 from legged.envs.flat import FlatConfig, FlatEnv
 from legged.envs.rough import RoughConfig, RoughEnv
 from legged.robots import GO1, OP3
 from legged.robots.spec import RobotSpec
-from legged.envs.config import NoiseConfig
 from legged.sensors.heightscan import ScanConfig
-from legged.soccer.config import SoccerSceneConfig
+from legged.skills.config import GetUpConfig, WalkSkillConfig
+from legged.soccer.config import SoccerConfig, SoccerSceneConfig
 from legged.soccer.randomize import OP3_RANDOMIZATION
-from legged.soccer.skill_config import GetUpConfig, WalkSkillConfig
-from legged.soccer.task_config import SoccerConfig
 from legged.worlds.levels import LEVELS, LevelConfig
 
 Kind = Literal["locomotion", "confined", "soccer"]
@@ -34,13 +33,13 @@ def _soccer(config: SoccerConfig):
 
 
 def _walk_skill(config):
-    from legged.soccer.skills import WalkSkillEnv  # imported on use, as the soccer env it builds on
+    from legged.skills.env import WalkSkillEnv  # imported on use, as the soccer env it builds on
 
     return WalkSkillEnv(config)
 
 
 def _getup_skill(config):
-    from legged.soccer.skills import GetUpSkillEnv  # imported on use, as the soccer env it builds on
+    from legged.skills.env import GetUpSkillEnv  # imported on use, as the soccer env it builds on
 
     return GetUpSkillEnv(config)
 

@@ -34,7 +34,7 @@ from rsl_rl.utils import resolve_class
 from tensordict import TensorDict
 
 from legged.envs.api import layout_slices
-from legged.soccer.learner import label_groups
+from legged.soccer.vision.estimates import label_groups
 from legged.soccer.walker import COMMAND_SIZE
 from policies.config import HISTORY_ALGOS, PPOConfig, TrainConfig
 from policies.distributed import Launch

@@ -8,7 +8,7 @@ from typing import Any, Literal
 
 import yaml
 
-from legged.soccer.learner import label_groups
+from legged.soccer.vision.estimates import label_groups
 from legged.tasks import default_config, task_entry
 from policies.config_io import ConfigError, from_dict, to_dict
 

@@ -10,10 +10,10 @@ import numpy as np
 from legged.robots import OP3
 from legged.robots.models import checked_model
 from legged.robots.op3 import OP3_CTRL_DT
-from legged.soccer import skills
+from legged.skills.config import GetUpConfig
+from legged.skills.env import GetUpSkillEnv, WalkSkillEnv
+from legged.soccer.config import SoccerConfig
 from legged.soccer.drills import DrillConfig, DrillEnv
-from legged.soccer.skill_config import GetUpConfig
-from legged.soccer.task_config import SoccerConfig
 from legged.tasks import task_entry
 from policies.environments import steer_with_pilot
 from policies.evaluate import estimate_errors, evaluate
@@ -22,7 +22,7 @@ from policies.policy_io import load_policy, load_walker
 from policies.run_dir import RunDir, check_policy
 
 SKILL_DRILLS = {"op3-walk": "walk", "op3-getup": "getup"}
-"""Skill tasks (legged.soccer.skills) and the drill each plays, in its own observations."""
+"""Skill tasks (legged.skills) and the drill each plays, in its own observations."""
 
 
 @dataclasses.dataclass
@@ -92,18 +92,18 @@ def players_view(trained: SoccerConfig) -> SoccerConfig:
 
 def drill_env(player: str, drill: DrillConfig, randomize: bool, robot: str = "project") -> DrillEnv:
     """The drill's environment for `player`: the drill itself (commanding the run's walker if it has one), or
-    for a skill run (legged.soccer.skills) its task set up as the drill; the game's randomisation on or off; every
+    for a skill run (legged.skills) its task set up as the drill; the game's randomisation on or off; every
     robot on the OP3 model `robot` (project, menagerie or an MJCF path: legged.robots.models)."""
     run = None if player in ("placo", SCRIPT) else RunDir(player).load_config()
     with_randomization = lambda config: dataclasses.replace(
         config, robot_model=robot, randomization=dataclasses.replace(config.randomization, enabled=randomize))
     if run is not None and run.task == "op3-walk":  # the run's own config (what it trained on), drill commands
-        return skills.WalkSkillEnv(with_randomization(dataclasses.replace(
+        return WalkSkillEnv(with_randomization(dataclasses.replace(
             run.env, command_seconds=drill.command_seconds, command_low=drill.command_low,
             command_high=drill.command_high, episode_seconds=20.0)))
     if player == SCRIPT or (run is not None and run.task == "op3-getup"):  # the script: the reference, no policy
         base = GetUpConfig() if run is None else run.env
-        return skills.GetUpSkillEnv(with_randomization(dataclasses.replace(base, episode_seconds=drill.getup_seconds)))
+        return GetUpSkillEnv(with_randomization(dataclasses.replace(base, episode_seconds=drill.getup_seconds)))
     walker = None
     if run is not None and run.walker:  # a soccer player that commands a walking skill
         walker = load_walker(run.walker, run.getup, run.command_prior)

@@ -96,7 +96,7 @@ def robot_ratios(reports: dict, first: str) -> dict:
 
 def estimate_errors(finals: list[dict]) -> dict:
     """A vision player that estimates the game: the RMS position errors of its estimate (metres) by part, averaged
-    over the episodes, and `ball_near` (the ball when near, legged.soccer.learner.NEAR_BALL_M) pooled over the
+    over the episodes, and `ball_near` (the ball when near, legged.soccer.vision.estimates.NEAR_BALL_M) pooled over the
     steps it was near (None if it never was); {} for other players."""
     estimates = sorted(k for k in finals[0]
                        if k.startswith("estimate_") and k.endswith("_m") and k != "estimate_ball_near_m")

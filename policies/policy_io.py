@@ -14,10 +14,10 @@ from brax.training.agents.ppo import networks as ppo_networks
 from rsl_rl.utils import resolve_class
 
 from legged.robots.op3 import OP3
-from legged.soccer.gait_table import load_gait_table
 from legged.soccer.getup_motion import getup_motion
 from legged.soccer.opponents import OpponentNet
-from legged.soccer.placo_player import load_tables
+from legged.soccer.placo.gait_table import load_gait_table
+from legged.soccer.placo.player import load_tables
 from legged.soccer.walker import Walker
 from legged.tasks import task_entry
 from policies.algorithms import actor_inputs, actor_model, dummy_observations

@@ -473,7 +473,7 @@ def test_a_vision_students_tracked_pose_is_recorded_and_shown(server, tmp_path):
     from legged.envs.vector import VectorEnv
     from legged.soccer.learner import TRACKED_ARROW_M, LearnerView
     from legged.soccer.observe import read_bodies
-    from legged.soccer.tracker import tracker_kickoff, tracker_start
+    from legged.soccer.vision.tracker import tracker_kickoff, tracker_start
     from policies.policy_io import load_walker
     from web.overlays import Overlays
     from web.rollout import Recorder, RecorderConfig

@@ -155,16 +155,19 @@ def test_the_cycle_finder_finds_cycles():
 LEGGED_ORDER = [
     ("base", ("legged", "legged.robots", "legged.worlds", "legged.sensors", "legged.envs.math")),
     ("environments", ("legged.envs", "legged.soccer")),
+    ("skills", ("legged.skills",)),
     ("tasks", ("legged.tasks", "legged.bench", "legged.soccer.bench", "legged.soccer.parallel_env", "legged.peers")),
     ("cli", ("legged.cli",)),
 ]
 """The groups of `legged`, lowest first: a module may import its own group and those before it. Each entry is a
 module and everything under it; the most specific entry places a module, and `legged` alone is the package's
-own __init__. Placed apart from their folders: legged.envs.math (rotation helpers that import nothing of the
-project, read by the sensors too) in the base; legged.soccer.bench (the soccer throughput benchmark, built on
-legged.bench) and legged.soccer.parallel_env (the PettingZoo adapter, which builds its game through the
-registry) with the tasks. Beside the registry sit the benchmarks built on it, legged/bench.py, and
-legged/peers (MuJoCo Playground's timing script, run with the peer's own Python: it imports nothing of legged)."""
+own __init__. The skills (legged.skills: op3-walk, op3-getup, drills of the soccer game made tasks) sit between
+the soccer game they build on and the registry that names them. Placed apart from their folders: legged.envs.math
+(rotation helpers that import nothing of the project, read by the sensors too) in the base; legged.soccer.bench
+(the soccer throughput benchmark, built on legged.bench) and legged.soccer.parallel_env (the PettingZoo adapter,
+which builds its game through the registry) with the tasks. Beside the registry sit the benchmarks built on it,
+legged/bench.py, and legged/peers (MuJoCo Playground's timing script, run with the peer's own Python: it imports
+nothing of legged)."""
 
 POLICIES_ORDER = [
     ("run files", ("policies", "policies.config_io", "policies.config", "policies.run_dir", "policies.distributed")),
@@ -224,8 +227,10 @@ def test_policies_layers_import_downwards():
 
 def test_the_groups_place_modules_by_their_most_specific_entry():
     assert [_group(m, LEGGED_ORDER) for m in ("legged", "legged.envs.base", "legged.envs.math", "legged.soccer.env",
-                                              "legged.soccer.bench", "legged.cli.main", "legged.client")] == \
-        [0, 1, 0, 1, 2, 3, None]
+                                              "legged.soccer.placo.player", "legged.soccer.vision.tracker",
+                                              "legged.skills", "legged.skills.env", "legged.soccer.bench",
+                                              "legged.cli.main", "legged.client")] == \
+        [0, 1, 0, 1, 1, 1, 2, 2, 3, 4, None]
     assert _group("policies.checkpoints", POLICIES_ORDER) == 1 and _group("policies.new", POLICIES_ORDER) is None
 
 

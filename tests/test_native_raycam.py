@@ -10,7 +10,7 @@ import pytest
 from legged.sensors.native_raycam import NativeRayCaster
 from legged.sensors.raycam import OPPONENT, OWN_TEAM, poses_of, render
 from legged.soccer import KICKOFF_KEY, SoccerLayout, SoccerSceneConfig, build_soccer_scene
-from legged.soccer.vision import soccer_camera
+from legged.soccer.vision.cameras import soccer_camera
 
 
 def _random_states(model, layout, count: int, seed: int = 0) -> list:

@@ -18,7 +18,7 @@ from legged.robots.models import robot_model
 from legged.robots.op3 import OP3_CTRL_DT
 from legged.soccer.env import SoccerEnv
 from legged.soccer.randomize import OP3_COVERING, OP3_RANDOMIZATION, SoccerRandomization, sample
-from legged.soccer.task_config import SoccerConfig
+from legged.soccer.config import SoccerConfig
 from legged.worlds.mjcf import pair_attributes
 from tests.menagerie import menagerie_model
 

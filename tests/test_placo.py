@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from legged.robots.op3 import OP3
-from legged.soccer.gait_table import (
+from legged.soccer.placo.gait_table import (
     advance_phase,
     filter_command,
     gait_targets,
@@ -19,8 +19,8 @@ from legged.soccer.gait_table import (
     planned_speed,
     sequence_targets,
 )
-from legged.soccer.kick_table import kick_targets, load_kick_table
-from legged.soccer.op3_mirror import mirror_joints, mirror_signs
+from legged.soccer.placo.kick_table import kick_targets, load_kick_table
+from legged.soccer.placo.mirror import mirror_joints, mirror_signs
 
 N_JOINTS = len(OP3.joint_names)
 batched_targets = jax.jit(jax.vmap(gait_targets, in_axes=(None, 0, 0)))
@@ -61,7 +61,7 @@ def _random_pose(model, rng):
 def test_placo_and_mujoco_forward_kinematics_agree(tmp_path):
     import placo
 
-    from legged.soccer.op3_urdf import op3_urdf_path
+    from legged.soccer.placo.urdf import op3_urdf_path
 
     robot = placo.HumanoidRobot(str(op3_urdf_path(directory=tmp_path)))
     model = mujoco.MjModel.from_xml_path(str(OP3.mjcf_path))
@@ -85,8 +85,8 @@ def test_placo_and_mujoco_forward_kinematics_agree(tmp_path):
 
 
 def test_run_time_tables_import_without_placo():
-    code = ("import sys, legged.soccer.gait_table, legged.soccer.kick_table, legged.soccer.op3_open_loop; "
-            "sys.exit('placo' in sys.modules)")
+    code = ("import sys, legged.soccer.placo.gait_table, legged.soccer.placo.kick_table, "
+            "legged.soccer.placo.open_loop; sys.exit('placo' in sys.modules)")
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
 
 
@@ -218,7 +218,7 @@ def test_left_kick_mirrors_the_right(kick):
 
 
 def test_table_walk_moves_forward_without_falling(gait):
-    from legged.soccer.op3_open_loop import walk_table_in_mujoco
+    from legged.soccer.placo.open_loop import walk_table_in_mujoco
 
     forward = _grid_command(gait, int(np.searchsorted(gait.vx, 0.1)), int(np.searchsorted(gait.vy, 0.0)),
                             int(np.searchsorted(gait.yaw_rate, 0.0)))
@@ -232,7 +232,7 @@ def test_table_walk_moves_forward_without_falling(gait):
 
 @pytest.mark.parametrize("side", [0, 1])
 def test_kick_sends_the_ball_forward_without_falling(kick, side):
-    from legged.soccer.op3_open_loop import kick_ball_in_mujoco
+    from legged.soccer.placo.open_loop import kick_ball_in_mujoco
 
     result = kick_ball_in_mujoco(kick, side, after=0.5)
     assert result["fell"] is None

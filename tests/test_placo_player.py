@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from legged.cli import main
-from legged.soccer.placo_player import (BLEND, KICK, STAND, START, STOP, WALK, PlayerMemory, initial_memory,
+from legged.soccer.placo.player import (BLEND, KICK, STAND, START, STOP, WALK, PlayerMemory, initial_memory,
                                         load_tables, motion_step, soccer_request)
 
 

@@ -21,7 +21,7 @@ from legged.soccer import (
     SoccerSceneConfig,
     build_soccer_scene,
 )
-from legged.soccer.vision import soccer_camera, write_camera_images
+from legged.soccer.vision.cameras import soccer_camera, write_camera_images
 
 SEGMENTATION_THRESHOLD = 0.98
 """Least fraction of pixels whose class must match MuJoCo's renderer at the 1v1 kick-off. Measured: 1.000

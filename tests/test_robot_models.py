@@ -78,7 +78,7 @@ def test_soccer_on_menagerie_op3():
     """Every player is Menagerie's OP3 (two sole boxes per foot, its meshes, its own robot-robot contacts) at the
     physics step of its file, and the game stands at kick-off."""
     from legged.soccer.env import SoccerEnv
-    from legged.soccer.task_config import SoccerConfig
+    from legged.soccer.config import SoccerConfig
 
     env = SoccerEnv(dataclasses.replace(SoccerConfig(), robot_model="menagerie"))
     m = env.mj_model

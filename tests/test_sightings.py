@@ -1,4 +1,4 @@
-"""The ball and goal detector on the head camera's images (legged.soccer.sightings) against where MuJoCo puts the
+"""The ball and goal detector on the head camera's images (legged.soccer.vision.sightings) against where MuJoCo puts the
 ball and the goals, and a student whose state grew by the sightings starting as its source."""
 
 import dataclasses
@@ -14,7 +14,7 @@ from legged.envs.math import yaw_rotate
 from legged.sensors.raycam import poses_of, render
 from legged.soccer import KICKOFF_KEY
 from legged.soccer.observe import game_features, read_bodies
-from legged.soccer.sightings import camera_agents
+from legged.soccer.vision.sightings import camera_agents
 from legged.tasks import make
 
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from legged.cli import main
-from legged.soccer.placo_player import actions_of
-from legged.soccer.skill_config import WalkSkillConfig
+from legged.soccer.placo.player import actions_of
+from legged.skills.config import WalkSkillConfig
 from legged.tasks import make
 
 

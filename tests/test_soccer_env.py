@@ -197,7 +197,7 @@ def test_opponents_are_data_and_the_script_watches_the_ball():
 
 
 def test_soccer_config_is_checked():
-    from legged.soccer.task_config import SoccerConfig
+    from legged.soccer.config import SoccerConfig
 
     with pytest.raises(ValueError, match="end_on_fall must be"):
         SoccerConfig(end_on_fall="sometimes")
@@ -214,7 +214,7 @@ def test_soccer_config_is_checked():
 def test_soccer_randomisation_is_one_function_for_both_engines():
     from legged.soccer.env import SoccerEnv
     from legged.soccer.randomize import OP3_RANDOMIZATION, randomized_fields, sample
-    from legged.soccer.task_config import SoccerConfig
+    from legged.soccer.config import SoccerConfig
 
     env = SoccerEnv(SoccerConfig(randomization=OP3_RANDOMIZATION))
     m, where, ball = env.mj_model, env._dynamics, env.layout.ball_body
@@ -270,7 +270,7 @@ def test_approach_offset_aims_vel_to_ball_behind_the_ball():
     from legged.soccer.pitch import goal_centres
     from legged.soccer.rewards import reward_terms
     from legged.soccer.rules import BallCall
-    from legged.soccer.task_config import SoccerRewards
+    from legged.soccer.config import SoccerRewards
 
     zeros = jnp.zeros((2, 20))
 
@@ -299,7 +299,7 @@ def test_approach_offset_aims_vel_to_ball_behind_the_ball():
 
 
 def test_estimate_noise_is_stationary_and_shaped_like_a_tracked_estimate():
-    from legged.soccer.estimate_noise import EstimateNoise, blurred, error_size, first_error, next_error
+    from legged.soccer.vision.estimate_noise import EstimateNoise, blurred, error_size, first_error, next_error
 
     noise = EstimateNoise(enabled=True, correlation_s=0.5)
     start = first_error(jax.random.PRNGKey(0), 20000, 1)
@@ -329,8 +329,8 @@ def test_estimate_noise_is_stationary_and_shaped_like_a_tracked_estimate():
 def test_estimate_noise_sight_gives_the_ball_seen_held_then_guessed():
     """`estimate_noise.sight`: the ball exact-ish in the head camera's field, held where last seen for
     `memory_s`, then guessed with a larger error; a restart forgets it."""
-    from legged.soccer.estimate_noise import (UNSEEN, EstimateNoise, blurred, first_sighting, held_ball, in_sight,
-                                              next_sighting)
+    from legged.soccer.vision.estimate_noise import (UNSEEN, EstimateNoise, blurred, first_sighting, held_ball,
+                                                     in_sight, next_sighting)
 
     noise = EstimateNoise(enabled=True, sight=True)
     ahead = jnp.asarray([[1.0, 0.0], [-1.0, 0.0], [0.1, 0.0], [5.0, 0.0], [0.5, 0.9], [1.0, 0.5]])
@@ -366,8 +366,8 @@ def test_estimate_noise_sight_gives_the_ball_seen_held_then_guessed():
 
 def test_estimate_noise_blurs_only_the_deployable_game_features(game):
     from legged.soccer.env import SoccerEnv
-    from legged.soccer.estimate_noise import EstimateNoise, blurred, held_ball, in_sight
-    from legged.soccer.task_config import SoccerConfig
+    from legged.soccer.vision.estimate_noise import EstimateNoise, blurred, held_ball, in_sight
+    from legged.soccer.config import SoccerConfig
 
     with pytest.raises(ValueError, match="estimate_noise .* vision player"):
         SoccerConfig(vision=True, estimate_noise=EstimateNoise(enabled=True))

@@ -20,7 +20,7 @@ def test_passes_pettingzoos_parallel_api_test(vision_game):
 def test_vision_observations_are_the_head_camera_images(vision_game):
     """The camera observation is each robot's head camera: its depth channel agrees with MuJoCo's own
     renderer looking through the same camera."""
-    from legged.soccer.vision import native_images
+    from legged.soccer.vision.cameras import native_images
 
     env = vision_game
     assert env.possible_agents == ["home0", "away0"]

@@ -1,13 +1,14 @@
-"""The vision player's tracker (legged.soccer.tracker): odometry, lock-on, net corrections, ball memory, and its
-features against the game's own (legged.soccer.observe.game_features)."""
+"""The vision player's tracker (legged.soccer.vision.tracker): odometry, lock-on, net corrections, ball memory, and
+its features against the game's own (legged.soccer.observe.game_features)."""
 
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from legged.envs.math import yaw_rotate
-from legged.soccer.tracker import (BALL_MEMORY_S, TRACKER_INPUT_SIZE, TRACKER_SIZE, tracked_features, tracked_pose,
-                                   tracker_inputs, tracker_kickoff, tracker_sight, tracker_start, tracker_step)
+from legged.soccer.vision.tracker import (BALL_MEMORY_S, TRACKER_INPUT_SIZE, TRACKER_SIZE, tracked_features,
+                                          tracked_pose, tracker_inputs, tracker_kickoff, tracker_sight, tracker_start,
+                                          tracker_step)
 
 OWN_XY, OPPONENT_XY = np.array([-2.5, 0.0]), np.array([2.5, 0.0])
 NETS = np.array([[-2.8, 0.0], [2.8, 0.0]], np.float32)
@@ -115,7 +116,7 @@ def test_with_ball_motion_it_follows_a_rolling_ball_and_rolls_it_on_out_of_view(
     """A ball rolling at 0.8 m/s, slowing by BALL_DECEL, sighted every period with 3 cm errors for 1 s, then out of
     view for 0.5 s: the filter's velocity and its ball rolled on are close to the truth, nearer than the ball held
     where it was last seen; without ball_motion the ball is held (as before)."""
-    from legged.soccer.tracker import BALL_DECEL
+    from legged.soccer.vision.tracker import BALL_DECEL
 
     truth, dt = np.array([-1.0, 0.2, 0.3]), 0.025
     noise = np.random.default_rng(0).normal(0.0, 0.03, (60, 2))
@@ -140,7 +141,7 @@ def test_with_ball_motion_it_follows_a_rolling_ball_and_rolls_it_on_out_of_view(
     assert rolled_on < 0.04 and rolled_on < np.linalg.norm(last_seen - ball) / 2
     np.testing.assert_array_equal(features(moving, False)[3:6], 0.0)  # velocity the player's own without ball_vel
     with pytest.raises(ValueError, match="vision_ball_velocity .* needs vision_tracker"):
-        from legged.soccer.task_config import SoccerConfig
+        from legged.soccer.config import SoccerConfig
 
         SoccerConfig(vision=True, vision_ball_velocity=True)
 
@@ -242,8 +243,8 @@ def test_the_ball_decelerates_in_the_games_physics_as_the_filter_assumes():
     import mujoco
 
     from legged.soccer.env import SoccerEnv
-    from legged.soccer.task_config import SoccerConfig
-    from legged.soccer.tracker import BALL_DECEL
+    from legged.soccer.config import SoccerConfig
+    from legged.soccer.vision.tracker import BALL_DECEL
 
     env = SoccerEnv(SoccerConfig())
     model = env.mj_model

@@ -11,7 +11,7 @@ from legged.envs.vector import VectorEnv
 from legged.soccer.learner import LearnerView
 from legged.soccer.observe import PROPRIO_SIZE
 from legged.soccer.opponents import OpponentNet, network_opponent
-from legged.soccer.skill_config import WalkSkillConfig
+from legged.skills.config import WalkSkillConfig
 from legged.soccer.walker import Walker
 from legged.tasks import make
 
@@ -20,7 +20,7 @@ WALK = WalkSkillConfig()
 
 def _walker(layers, residual=False) -> Walker:
     from legged.robots.op3 import OP3
-    from legged.soccer.gait_table import load_gait_table
+    from legged.soccer.placo.gait_table import load_gait_table
 
     n = layers[0][0].shape[0]
     return Walker(policy=network_opponent(np.zeros(n), np.ones(n), layers), net=OpponentNet("elu"),
@@ -103,7 +103,7 @@ def test_a_commanding_learner_and_its_opponents_walk_through_the_walker():
 def test_with_the_placo_prior_actions_correct_the_placo_players_command():
     """A walker that copies the command into joints 0-2: with zero actions the learner and a network opponent
     walk the placo player's command for their own game features; an action adds to it, in action units."""
-    from legged.soccer.placo_player import load_tables, request_from_features
+    from legged.soccer.placo.player import load_tables, request_from_features
     from policies.config import ConfigError, TrainConfig
 
     size = PROPRIO_SIZE + 8
@@ -156,7 +156,7 @@ def test_with_the_placo_prior_actions_correct_the_placo_players_command():
 def estimating():
     """(a walker with the placo prior, the first state of a vision game whose player estimates the game, gazes
     and sights): one reset, compiled once for the tests that read it."""
-    from legged.soccer.placo_player import load_tables
+    from legged.soccer.placo.player import load_tables
 
     size = PROPRIO_SIZE + 8
     walker = dataclasses.replace(_walker([(np.zeros((size, 20), np.float32), np.full(20, 0.1, np.float32))]),
@@ -242,7 +242,7 @@ def test_a_fallen_robot_gets_up_through_the_getup_skill_then_walks_again():
     its gait clock, gives it back once it stands upright near its default pose, and restarts a script that
     ended without standing."""
     from legged.soccer.getup_motion import getup_motion, motion_targets
-    from legged.soccer.placo_player import actions_of
+    from legged.soccer.placo.player import actions_of
     from legged.soccer.walker import GETUP_RETRY_S
 
     walker = _walker([(np.zeros((PROPRIO_SIZE + 8, 20), np.float32), np.zeros(20, np.float32))])
@@ -300,7 +300,7 @@ def test_what_a_vision_player_that_estimates_the_game_steers_by(estimating):
     """The estimate the placo command is computed from (`used_estimate`): the network's; with vision_sighted_ball
     the ball the camera sees, when it sees it; with estimate_oracle the truth for the parts named (diagnostics).
     A state pilot (`steer_with`) replaces the player's own corrections by its network's at that estimate."""
-    from legged.soccer.sightings import SIGHTED, SIGHTING_SIZE
+    from legged.soccer.vision.sightings import SIGHTED, SIGHTING_SIZE
 
     walker, state = estimating
     size = PROPRIO_SIZE + 14  # a state player's features: proprioception and the game

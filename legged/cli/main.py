@@ -98,7 +98,7 @@ def cmd_export(args) -> int:
 def cmd_camera(args) -> int:
     """`legged camera`: each soccer player's head camera, the ray caster beside MuJoCo's renderer."""
     from legged.soccer.states import game_start
-    from legged.soccer.vision import write_camera_images
+    from legged.soccer.vision.cameras import write_camera_images
     from legged.tasks import TASKS, make, task_entry
 
     if task_entry(args.task).kind != "soccer":  # unknown names fail here too
@@ -238,7 +238,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "run's config.pilot)")
     ev.add_argument("--tracker", action="store_true",
                     help="a vision player that estimates the game steers by its tracker's goals and ball where it "
-                         "knows them (env.vision_tracker, legged.soccer.tracker)")
+                         "knows them (env.vision_tracker, legged.soccer.vision.tracker)")
     ev.add_argument("--compare-teacher", action="store_true",
                     help="a distilled soccer student: also play its teacher in the same games and report the "
                          "student's goals over the teacher's, with a 95%% bootstrap interval over the games")

@@ -13,7 +13,7 @@
   of vertical, for `stand_hold_s`); reported: `success_rate`, `time_to_stand_s`. Falls do not end it.
 
 `DrillEnv` is a single-agent environment (like the soccer learner's view): agent 0 is the player. With
-`placo=True` the placo player (legged.soccer.placo_player) drives it from inside the step and the actions
+`placo=True` the placo player (legged.soccer.placo.player) drives it from inside the step and the actions
 given are ignored; otherwise they are the player's (a trained policy's) actions. Physics, rules and
 randomisation are the soccer game's own.
 """
@@ -29,11 +29,11 @@ from brax.envs.base import State
 from legged.envs.math import quat_multiply, yaw_rotate
 from legged.envs.physics import PhysicsView, Spawn
 from legged.soccer import rules
+from legged.soccer.config import SoccerConfig
 from legged.soccer.env import SoccerEnv
 from legged.soccer.learner import LearnerView
 from legged.soccer.observe import read_bodies
-from legged.soccer.placo_player import actions_of, command_request, motion_step, request_from_features
-from legged.soccer.task_config import SoccerConfig
+from legged.soccer.placo.player import actions_of, command_request, motion_step, request_from_features
 from legged.soccer.walker import Walker
 
 DRILLS = ("walk", "empty-goal", "getup")
@@ -168,7 +168,8 @@ class DrillEnv(LearnerView):
         else:
             action, walker_state = self.learner_actions(state, action)
         actions = jnp.stack([action, jnp.zeros_like(action)])
-        return self.game.servo_controls(state, self.game.joint_targets(actions)), (actions, memory, walker_state, estimate_sq)
+        return (self.game.servo_controls(state, self.game.joint_targets(actions)),
+                (actions, memory, walker_state, estimate_sq))
 
     def transition(self, state: State, view: PhysicsView, actions) -> State:
         b = read_bodies(self.game.layout, view.qpos, view.qvel)

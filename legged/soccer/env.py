@@ -29,23 +29,24 @@ from mujoco import mjx
 
 from legged.envs.api import MjxEnv
 from legged.envs.motor import motor_limits, servo_gains, within_motor_curve
-from legged.envs.randomize import MODEL_DR
 from legged.envs.physics import PhysicsView, Spawn
+from legged.envs.randomize import MODEL_DR
 from legged.robots.models import mjx_model_of, robot_model
 from legged.robots.op3 import OP3
 from legged.robots.spec import RobotSpec
 from legged.sensors.native_raycam import render_anywhere
 from legged.soccer import observe, randomize, rules
-from legged.soccer.sightings import (BALL_MIN_SHADE, NET_MIN_SHADE, SIGHTED, SIGHTING_SIZE, camera_agents, pixel_points,
-                                     sighting)
-from legged.soccer.estimate_noise import blurred, first_error, first_sighting, held_ball, next_error, next_sighting
+from legged.soccer.config import SoccerConfig
 from legged.soccer.layout import SoccerLayout
 from legged.soccer.pitch import goal_centres, kickoff_poses
-from legged.soccer.placo_player import initial_memory
+from legged.soccer.placo.player import initial_memory
 from legged.soccer.rewards import reward_terms
 from legged.soccer.scene import build_soccer_scene
-from legged.soccer.task_config import SoccerConfig
-from legged.soccer.vision import soccer_camera
+from legged.soccer.vision.cameras import soccer_camera
+from legged.soccer.vision.estimate_noise import (blurred, first_error, first_sighting, held_ball, next_error,
+                                                 next_sighting)
+from legged.soccer.vision.sightings import (BALL_MIN_SHADE, NET_MIN_SHADE, SIGHTED, SIGHTING_SIZE, camera_agents,
+                                            pixel_points, sighting)
 from legged.soccer.walker import WALKER_STATE_SIZE
 
 
@@ -339,7 +340,8 @@ class SoccerEnv(MjxEnv):
         parts = []
         for key in self._dynamics_keys(dr):
             value = jnp.asarray(dr[key], jnp.float32) * (self.config.sim_dt if key == "latency" else 1.0)
-            parts.append(jnp.broadcast_to(value, (self.n_agents,)).reshape(self.n_agents, 1) if value.ndim < 2 else value)
+            per_robot = jnp.broadcast_to(value, (self.n_agents,)).reshape(self.n_agents, 1) if value.ndim < 2 else value
+            parts.append(per_robot)
         return parts
 
     @property

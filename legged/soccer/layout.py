@@ -15,8 +15,9 @@ import numpy as np
 
 from legged.robots.op3 import OP3
 from legged.robots.spec import RobotSpec
-from legged.soccer.config import TEAMS
 
+TEAMS = ("home", "away")
+"""Team names, in agent order: home players first, then away players. Home defends the goal at -x."""
 FLOOR_GEOM = "floor"
 BALL = "ball"
 """Name of the ball's body, free joint and geom."""

@@ -23,11 +23,12 @@ from legged.soccer.env import SoccerEnv
 from legged.soccer.observe import PROPRIO_SIZE, feature_layout, read_bodies
 from legged.soccer.opponents import (Opponent, OpponentNet, ball_pan, network_actions, opponent_step,
                                      scripted_opponent)
-from legged.soccer.placo_player import load_tables
-from legged.soccer.sightings import SIGHTED, SIGHTING_SIZE
-from legged.soccer.tracker import (TRACKER_INPUT_SIZE, tracked_features, tracked_pose, tracker_inputs,
-                                   tracker_kickoff, tracker_sight, tracker_start, tracker_step)
-from legged.soccer.vision import soccer_camera
+from legged.soccer.placo.player import load_tables
+from legged.soccer.vision.cameras import soccer_camera
+from legged.soccer.vision.estimates import estimate_parts, squared_errors
+from legged.soccer.vision.sightings import SIGHTED, SIGHTING_SIZE
+from legged.soccer.vision.tracker import (TRACKER_INPUT_SIZE, tracked_features, tracked_pose, tracker_inputs,
+                                          tracker_kickoff, tracker_sight, tracker_start, tracker_step)
 from legged.soccer.walker import COMMAND_SIZE, Walker, getting_up
 
 LEARNER = 0
@@ -36,24 +37,6 @@ HEAD_PAN = 0
 """Index of the head pan joint in the OP3's joint actions (RobotSpec.joint_names)."""
 TRACKED_ARROW_M = 0.3
 """Length of the tracked heading drawn by viewers (`tracked_points`), metres."""
-NEAR_BALL_M = 1.0
-"""The ball this close to the learner (metres, in the ground plane) is near: the estimate's `ball_near` error
-counts those steps only, where kicking needs the estimate most."""
-
-
-def estimate_parts(players_per_team: int) -> dict[str, slice]:
-    """Positions in an estimate of the game features whose errors are reported and drawn: ball (x, y, z), own
-    and opponent goal (x, y), the first other player's position (x, y; the teammate in 2v2)."""
-    parts = layout_slices(feature_layout(players_per_team)[1:])  # the game features after the proprioception
-    first_other = list(parts.values())[4]
-    return {"ball": parts["ball"], "own_goal": parts["own_goal"], "opponent_goal": parts["opponent_goal"],
-            "first_other": slice(first_other.start, first_other.start + 2)}
-
-
-def label_groups(players_per_team: int) -> dict[str, slice]:
-    """Named groups of the actions of a learner that estimates the game (`estimates_world`), which are also its
-    teacher's labels: `corrections` to the placo command, then the game features after the proprioception."""
-    return layout_slices([("corrections", COMMAND_SIZE)] + feature_layout(players_per_team)[1:])
 
 
 class LearnerView(MjxEnv):
@@ -80,7 +63,8 @@ class LearnerView(MjxEnv):
         self.estimates_world = walker is not None and walker.prior is not None and game.config.vision
         if game.config.vision_gaze and not self.estimates_world:
             raise ValueError("vision_gaze turns the head toward the player's own estimate of the ball: it needs a "
-                             "vision player that estimates the game (a walker with the placo prior: command_prior=placo)")
+                             "vision player that estimates the game (a walker with the placo prior: "
+                             "command_prior=placo)")
         if game.config.vision_tracker and not self.estimates_world:
             raise ValueError("vision_tracker replaces parts of a vision player's estimate of the game by what it "
                              "tracks: it needs a player that estimates the game (command_prior=placo)")
@@ -105,7 +89,7 @@ class LearnerView(MjxEnv):
         self._net_xy = goals + np.stack([np.sign(goals[:, 0]) * game.config.scene.goal_depth, np.zeros(2)], -1)
         """... and of the centres of their back nets (what the camera sights)."""
         self.tables = load_tables()
-        """The placo player's walk and kick (legged.soccer.placo_player)."""
+        """The placo player's walk and kick (legged.soccer.placo.player)."""
         self._camera = None
         self.state_pilot: Opponent | None = None
         """A state player's network (an Opponent) that steers a game-estimating vision player from its estimate
@@ -268,15 +252,11 @@ class LearnerView(MjxEnv):
 
     def _estimate_sq(self, state: State, action: jax.Array) -> tuple[jax.Array, jax.Array] | None:
         """(squared errors (metres^2), steps counted) of the learner's estimate (`estimates_world`) of each of
-        `estimate_parts`, then of the ball when it is near (NEAR_BALL_M; else neither counts)."""
+        `estimate_parts`, then of the ball when it is near (legged.soccer.vision.estimates.squared_errors)."""
         if not self.estimates_world:
             return None
         truth = state.info["game_obs"]["features"][LEARNER, PROPRIO_SIZE:]
-        error = self.used_estimate(state, action) - truth
-        sq = jnp.stack([jnp.sum(error[part] ** 2) for part in self.estimate_parts.values()])
-        ball = self.estimate_parts["ball"]
-        near = (jnp.linalg.norm(truth[ball][:2]) < NEAR_BALL_M).astype(sq.dtype)
-        return jnp.append(sq, near * sq[0]), jnp.append(jnp.ones_like(sq), near)
+        return squared_errors(self.used_estimate(state, action), truth, self.estimate_parts)
 
     def transition(self, state: State, view: PhysicsView, actions) -> State:
         actions, memory, walker_state, estimate_sq = actions

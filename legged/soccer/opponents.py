@@ -4,7 +4,7 @@ An `Opponent` is a pytree of arrays (no Python objects), passed to `step` as an 
 snapshot of a pool for another changes data, not the compiled program. Its network is an MLP with an
 input normaliser, (obs - mean) / std, then Linear-activation layers, the actor layout of both training
 backends; `weight` 1 uses the network, 0 a script: `placo` 1 the placo player (walks to the ball and kicks
-it, legged.soccer.placo_player; it keeps a memory per robot, `opponent_step`), 0 the standing script.
+it, legged.soccer.placo.player; it keeps a memory per robot, `opponent_step`), 0 the standing script.
 Every opponent reads the full egocentric features (`SoccerEnv.policy_state_size` first entries of
 `privileged_state`), so a state-task teacher can play against a vision student.
 """
@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from legged.soccer.observe import PROPRIO_SIZE
-from legged.soccer.placo_player import actions_of, motion_step, request_from_features
+from legged.soccer.placo.player import actions_of, motion_step, request_from_features
 
 ACTIVATIONS = {"elu": jax.nn.elu, "relu": jax.nn.relu, "tanh": jnp.tanh, "swish": jax.nn.swish,
                "silu": jax.nn.silu, "selu": jax.nn.selu}

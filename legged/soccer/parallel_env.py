@@ -8,7 +8,7 @@
         observations, rewards, terminations, truncations, infos = env.step(actions)
 
 Agents are named after their robots ('home0', 'away0', ...); `players={'away0': 'placo'}` hands robots to a
-built-in player (the placo player, legged.soccer.placo_player), which then acts inside `step` and is no
+built-in player (the placo player, legged.soccer.placo.player), which then acts inside `step` and is no
 agent of the API. Each observation is the agent's `state`
 vector (state tasks) or a dict with `state` and `camera` (vision task); the ground truth is in
 `infos[agent]['privileged_state']` and the whole game in `state()`. Physics is native MuJoCo (the batched
@@ -25,7 +25,7 @@ from pettingzoo import ParallelEnv
 
 from legged.envs.native import NativeEnvs
 from legged.soccer.opponents import placo_actions
-from legged.soccer.placo_player import load_tables
+from legged.soccer.placo.player import load_tables
 from legged.tasks import make
 
 

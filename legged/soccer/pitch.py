@@ -11,7 +11,8 @@ import dataclasses
 
 import numpy as np
 
-from legged.soccer.config import TEAMS, SoccerSceneConfig
+from legged.soccer.config import SoccerSceneConfig
+from legged.soccer.layout import TEAMS
 
 
 @dataclasses.dataclass(frozen=True)

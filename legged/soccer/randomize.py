@@ -17,7 +17,7 @@ import mujoco
 import numpy as np
 
 from legged.envs.randomize import draw_model, model_fields, servo_fields
-from legged.soccer.scene import BALL, FLOOR_GEOM
+from legged.soccer.layout import BALL, FLOOR_GEOM
 
 FIELDS = ("body_mass", "body_inertia", "body_ipos", "pair_friction", "actuator_gainprm", "actuator_biasprm",
           "dof_damping", "dof_armature", "dof_frictionloss", "pair_solref", "pair_solimp", "pair_margin")
@@ -142,7 +142,8 @@ class SoccerDynamics:
         floor = (model.pair_geom1 == layout.floor_geom) | (model.pair_geom2 == layout.floor_geom)
         return cls(robot_bodies=robot, ball_body=layout.ball_body, floor_pairs=~ball, ball_pairs=ball,
                    ball_floor_pair=names.index(f"{BALL}~{FLOOR_GEOM}"),
-                   joint_dofs=one_hot(layout.joint_dof_adr, model.nv), joint_actuators=one_hot(layout.actuator_ids, model.nu),
+                   joint_dofs=one_hot(layout.joint_dof_adr, model.nv),
+                   joint_actuators=one_hot(layout.actuator_ids, model.nu),
                    foot_pairs=(feet & floor).astype(np.float32), n_agents=layout.n_agents,
                    torso_bodies=one_hot(layout.torso_body, model.nbody))
 

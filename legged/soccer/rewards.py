@@ -6,9 +6,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from legged.envs.rewards import penalty_terms
+from legged.soccer.config import SoccerRewards
 from legged.soccer.observe import Bodies
 from legged.soccer.rules import BallCall
-from legged.soccer.task_config import SoccerRewards
 
 
 def _unit(v):

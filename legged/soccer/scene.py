@@ -27,8 +27,8 @@ import numpy as np
 
 from legged.robots.op3 import OP3
 from legged.robots.spec import RobotSpec
-from legged.soccer.config import TEAMS, SoccerSceneConfig
-from legged.soccer.layout import BALL, FLOOR_GEOM, SoccerLayout
+from legged.soccer.config import SoccerSceneConfig
+from legged.soccer.layout import BALL, FLOOR_GEOM, TEAMS, SoccerLayout
 from legged.soccer.pitch import (
     goal_boxes,
     kickoff_poses,
@@ -108,7 +108,8 @@ def _team_geoms(child: mujoco.MjSpec, robot: RobotSpec) -> list:
     named = [child.geom(n) for n in TEAM_COLOUR_GEOMS if child.geom(n) is not None]
     if named:
         return named
-    return [g for g in child.body(robot.root_body).geoms if not (g.contype or g.conaffinity) and g.group != HIDDEN_GROUP]
+    return [g for g in child.body(robot.root_body).geoms
+            if not (g.contype or g.conaffinity) and g.group != HIDDEN_GROUP]
 
 
 _BITS_PER_ROBOT = 8

@@ -1,7 +1,7 @@
 """A trained walking skill as a frozen low level: soccer players that command velocities instead of joints.
 
-The anchors (Haarnoja et al. 2024) train soccer end to end from skill teachers on far more compute than this
-project has; here a soccer learner can instead play through a frozen `op3-walk` policy (legged.soccer.skills):
+Soccer can be trained end to end from skill teachers, on far more compute than this project has; here a soccer
+learner can instead play through a frozen `op3-walk` policy (legged.skills.env):
 its action is a (vx, vy, yaw rate) command, which the walker turns into the 20 joint actions at the control
 rate, reading the robot's own proprioception, the command, its low-pass filtered copy and its gait clock, as
 it did in training (a residual walker adds the placo gait's reference at the clock and the filtered command,
@@ -24,10 +24,10 @@ import dataclasses
 import jax
 import jax.numpy as jnp
 
-from legged.soccer.gait_table import GaitTable, advance_phase, filter_command, gait_targets
 from legged.soccer.getup_motion import GetUpMotion, lies_on_back, motion_features, motion_targets
 from legged.soccer.opponents import Opponent, OpponentNet, network_actions
-from legged.soccer.placo_player import PlacoTables, actions_of, request_from_features
+from legged.soccer.placo.gait_table import GaitTable, advance_phase, filter_command, gait_targets
+from legged.soccer.placo.player import PlacoTables, actions_of, request_from_features
 
 COMMAND_SIZE = 3
 """A commanding player's action: (vx, vy, yaw rate), each in [-1, 1] of the walker's command range."""

@@ -17,7 +17,7 @@ import numpy as np
 
 from legged.envs.vector import VectorEnv
 from legged.soccer.observe import PROPRIO_SIZE
-from legged.soccer.tracker import tracker_inputs
+from legged.soccer.vision.tracker import tracker_inputs
 from policies.evaluate import held_out, soccer_opponent
 from policies.policy_io import actor_observation, load_policy
 from policies.training import build_env

@@ -7,7 +7,7 @@ that tracker, an extended Kalman filter over the torso's ground pose (x, y, yaw)
 
 - predict, every control period: yaw advances by the gyro's rate about the vertical, x and y by the walker's
   filtered velocity command (measured over 5 s: 0.15 m of drift with the true yaw, 0.03 rad of yaw);
-- correct with each goal net the camera sights (legged.soccer.sightings: the mean of the net's visible points,
+- correct with each goal net the camera sights (legged.soccer.vision.sightings: the mean of the net's visible points,
   in the heading frame), modelled as the centre of the goal's back net: well placed along the pitch, up to half
   the goal's width off across it; a sighting too far from the prediction (a false one) is ignored;
 - lock on: a game starts with the robot near its kick-off spot but turned anyhow (+-90 degrees), so the yaw is
@@ -109,7 +109,7 @@ def tracker_step(tracker, velocity, yaw_rate, getting_up, dt: float, ball_motion
 
 def tracker_sight(tracker, sightings, net_centres, goal_width: float, ball_motion: bool = False) -> jnp.ndarray:
     """Correct with one control period's `sightings` [3, 4] (ball, own goal's net, opponent goal's net: seen, x,
-    y, z in the heading frame; legged.soccer.sightings) and the world x, y [2, 2] of the own and opponent goal's
+    y, z in the heading frame; legged.soccer.vision.sightings) and the world x, y [2, 2] of the own and opponent goal's
     back-net centres; with `ball_motion` a ball sighting corrects the ball's filter (`BALL_MEMORY_S` after its
     last sighting, it starts a new track, the ball still)."""
     pose, cov, locked, ball, known, age, ball_vel, ball_cov = _unpack(tracker)

@@ -1,12 +1,12 @@
-"""Configuration of the OP3 skill tasks (legged.soccer.skills): op3-walk and op3-getup."""
+"""Configuration of the OP3 skill tasks (legged.skills.env): op3-walk and op3-getup."""
 
 from __future__ import annotations
 
 import dataclasses
 
 from legged.soccer.config import SoccerSceneConfig
+from legged.soccer.config import SoccerConfig
 from legged.soccer.randomize import SoccerRandomization
-from legged.soccer.task_config import SoccerConfig
 
 LEG_JOINTS = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ank_pitch", "ank_roll")
 """The OP3's leg joints (without their l_ / r_ prefix): the joints the imitation reward compares."""

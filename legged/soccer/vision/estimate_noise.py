@@ -5,7 +5,7 @@ estimate (`legged eval VISION_RUN --pilot STATE_RUN`, `LearnerView.steer_with`).
 truth is brittle there: its corrections assume exact features. `SoccerConfig.estimate_noise` trains one on game
 features with errors shaped like the estimate's:
 
-- the goals are seen through the tracker's pose (legged.soccer.tracker): one error of the player's x, y and yaw
+- the goals are seen through the tracker's pose (legged.soccer.vision.tracker): one error of the player's x, y and yaw
   moves both goals together, the yaw's share growing with their distance;
 - the ball and the other players are estimated in the heading frame (sighted, remembered or regressed): an
   error per coordinate whose size grows with the distance (near the feet a sighting or a fresh memory is within

@@ -1,4 +1,4 @@
-"""Building the OP3's kick table (legged/soccer/kick_table.py) from placo's whole-body kinematics; needs placo.
+"""Building the OP3's kick table (legged/soccer/placo/kick_table.py) from placo's whole-body kinematics; needs placo.
 
 `build_kick` drives the same `KinematicsSolver` tasks as the walk (`PlacoWalk`: both feet 6-D, CoM,
 trunk orientation, arms and head held) from the walk's standing pose (double support, `stand` of the
@@ -18,9 +18,9 @@ Servo targets are the IK positions plus the walk's feedforward (`servo_targets`;
 blended between the feet by where the CoM lies in double support, the support foot's alone once the
 kicking foot is off the floor).
 
-The right kick is computed; the left one is its mirror image (legged/soccer/op3_mirror.py; a constant
+The right kick is computed; the left one is its mirror image (legged/soccer/placo/mirror.py; a constant
 correction makes its ends exactly `stand`). Regenerate (a few seconds):
-`python -m legged.soccer.placo_kick --out assets/placo/op3_kick.npz` (`--test` adds the MuJoCo ball test).
+`python -m legged.soccer.placo.kick_build --out assets/placo/op3_kick.npz` (`--test` adds the MuJoCo ball test).
 """
 
 from __future__ import annotations
@@ -33,11 +33,11 @@ import numpy as np
 import placo
 
 from legged.robots.op3 import OP3
-from legged.soccer.kick_table import KICK_PATH, SIDES, load_kick_table
-from legged.soccer.npz_tables import save_arrays
-from legged.soccer.op3_mirror import mirror_joints, mirror_signs
-from legged.soccer.op3_open_loop import kick_ball_in_mujoco, walk_kick_walk_in_mujoco
-from legged.soccer.placo_walk import PlacoWalk, PlacoWalkConfig, servo_targets, split_static_torques, static_torques
+from legged.soccer.placo.kick_table import KICK_PATH, SIDES, load_kick_table
+from legged.soccer.placo.mirror import mirror_joints, mirror_signs
+from legged.soccer.placo.npz_tables import save_arrays
+from legged.soccer.placo.open_loop import kick_ball_in_mujoco, walk_kick_walk_in_mujoco
+from legged.soccer.placo.walk import PlacoWalk, PlacoWalkConfig, servo_targets, split_static_torques, static_torques
 
 TOE_AHEAD = 0.0635
 """How far the toe lies ahead of the sole centre (site), m."""
@@ -207,8 +207,9 @@ def build_kick_table(config: PlacoKickConfig = PlacoKickConfig(), walk_config: P
     if progress:
         progress(f"right kick: {len(right['targets'])} samples ({right['duration']:.2f} s), contact at phase "
                  f"{right['contact_phase']:.3f}, sole speed {right['foot_speed']:.2f} m/s, max joint speed "
-                 f"{right['max_joint_speed']:.2f} rad/s, ends {right['end_error']:.1e} rad from stand; stand asymmetry {np.abs(stand - mirror_joints(stand, signs)).max():.1e}"
-                 f" rad; mirrored vs placo's own left kick: max {asym:.4f} rad")
+                 f"{right['max_joint_speed']:.2f} rad/s, ends {right['end_error']:.1e} rad from stand; stand "
+                 f"asymmetry {np.abs(stand - mirror_joints(stand, signs)).max():.1e} rad; mirrored vs placo's own "
+                 f"left kick: max {asym:.4f} rad")
     ball = np.stack([right["ball"], right["ball"] * [1.0, -1.0]])
     f32 = lambda a: np.asarray(a, dtype=np.float32)
     settings = {"kick": dataclasses.asdict(config), "walk": dataclasses.asdict(wc), "sides": list(SIDES),

@@ -15,8 +15,9 @@ import numpy as np
 
 from legged.robots.op3 import OP3, OP3_CTRL_DT
 from legged.soccer.config import SoccerSceneConfig
-from legged.soccer.gait_table import GaitTable, advance_phase, filter_command, gait_targets, load_gait_table, planned_speed
-from legged.soccer.kick_table import SIDES, KickTable, load_kick_table
+from legged.soccer.placo.gait_table import (GaitTable, advance_phase, filter_command, gait_targets, load_gait_table,
+                                            planned_speed)
+from legged.soccer.placo.kick_table import SIDES, KickTable, load_kick_table
 
 BALL_RADIUS = SoccerSceneConfig().ball_radius
 """Radius of the soccer ball, m."""
@@ -94,7 +95,8 @@ class OP3Sim:
         d = self.data
         w, x, y, z = d.qpos[3:7]
         up = d.body(OP3.root_body).xmat.reshape(3, 3)[2, 2]
-        return d.qpos[:2].copy(), float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))), float(d.qpos[2]), float(up)
+        yaw = float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+        return d.qpos[:2].copy(), yaw, float(d.qpos[2]), float(up)
 
     def fallen(self) -> bool:
         """Root below 0.15 m or torso tilted more than 60 degrees."""
@@ -196,7 +198,8 @@ def _rounded(values, digits=4) -> tuple:
     return tuple(round(float(v), digits) for v in values)
 
 
-def walk_table_in_mujoco(table: GaitTable, commands, duration=8.0, measure_last=4.0, mode="filter", tau=None) -> list[dict]:
+def walk_table_in_mujoco(table: GaitTable, commands, duration=8.0, measure_last=4.0, mode="filter",
+                         tau=None) -> list[dict]:
     """For each command: stand 1 s, start, walk `duration` s with the table (open loop, native MuJoCo);
     speed over the last `measure_last` s (heading frame), root displacement and when the robot fell."""
     sim, out = OP3Sim(), []
@@ -238,7 +241,7 @@ def compare_table_to_solver(table: GaitTable | None = None, duration=20.0, chang
     difference of the servo targets (rad; whole run, and leg joints), and with `simulate` the same
     sequence walked open loop in native MuJoCo by both (distance, falls); with `grid_speeds` the speed
     the table achieves in MuJoCo for every grid command."""
-    from legged.soccer.placo_walk import PlacoWalk, PlacoWalkConfig  # placo, the solver, loads for this comparison only
+    from legged.soccer.placo.walk import PlacoWalk, PlacoWalkConfig  # placo, the solver, loads for this comparison only
 
     table = table if table is not None else load_gait_table(xp=np)
     walk = PlacoWalk(config or PlacoWalkConfig())

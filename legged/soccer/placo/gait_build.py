@@ -1,6 +1,6 @@
-"""Building the OP3 gait table (legged/soccer/gait_table.py) from placo's walk; needs placo.
+"""Building the OP3 gait table (legged/soccer/placo/gait_table.py) from placo's walk; needs placo.
 
-`PlacoWalk` (legged/soccer/placo_walk.py) needs placo, a C++ library, at every control period. Here it
+`PlacoWalk` (legged/soccer/placo/walk.py) needs placo, a C++ library, at every control period. Here it
 is run offline instead, once per command of a grid, and what it outputs is kept: for each command a
 least-squares fit of a periodic piecewise-linear curve (`n_phase` knots) to `record_strides` strides
 of servo targets, sampled at the control rate after `settle_strides` strides from standing (the stride
@@ -8,7 +8,7 @@ period is not a multiple of the control period, so the strides sample different 
 start (standing to the first swing) and stop (zero-command gait back to standing) sequences and the
 speeds placo actually plans for each grid command.
 
-Regenerate (about 35 s): `python -m legged.soccer.placo_gait_build --out assets/placo/op3_gait.npz`
+Regenerate (about 35 s): `python -m legged.soccer.placo.gait_build --out assets/placo/op3_gait.npz`
 (add `--compare` for `compare_table_to_solver`'s numbers, about 2 more minutes).
 """
 
@@ -23,9 +23,9 @@ import time
 import numpy as np
 
 from legged.robots.op3 import OP3
-from legged.soccer.gait_table import GAIT_PATH, load_gait_table
-from legged.soccer.npz_tables import save_arrays
-from legged.soccer.placo_walk import PlacoWalk, PlacoWalkConfig
+from legged.soccer.placo.gait_table import GAIT_PATH, load_gait_table
+from legged.soccer.placo.npz_tables import save_arrays
+from legged.soccer.placo.walk import PlacoWalk, PlacoWalkConfig
 
 
 @dataclasses.dataclass(frozen=True)
@@ -183,7 +183,7 @@ def main(argv=None):
         print(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB): targets {data['targets'].shape}, "
               f"period {float(data['period']):.3f} s, start {len(data['start'])}, stop {len(data['stop'])} samples")
     if args.compare:
-        from legged.soccer.op3_open_loop import compare_table_to_solver  # JAX and MuJoCo load for --compare only
+        from legged.soccer.placo.open_loop import compare_table_to_solver  # JAX and MuJoCo load for --compare only
 
         table = load_gait_table(args.out, xp=np)
         for mode in ("filter", "stride"):

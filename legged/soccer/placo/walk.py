@@ -19,7 +19,7 @@ re-lays the later steps, `replan` continues the CoM from its current position, v
 acceleration, so joint targets stay continuous through command changes (a new command is in effect
 from the next-but-one footstep, i.e. after 1 to 2 steps).
 
-Open loop: nothing is measured; the kinematic model (legged/soccer/op3_urdf.py, generated from
+Open loop: nothing is measured; the kinematic model (legged/soccer/placo/urdf.py, generated from
 assets/robots/op3.xml) is floored on its support foot after each IK step, as in placo's examples.
 """
 
@@ -31,7 +31,7 @@ import numpy as np
 import placo
 
 from legged.robots.op3 import OP3, OP3_CTRL_DT
-from legged.soccer.op3_urdf import op3_urdf_path
+from legged.soccer.placo.urdf import op3_urdf_path
 
 UPPER_JOINTS = tuple(n for n in OP3.joint_names if n.startswith("head") or n[2:] in ("sho_pitch", "sho_roll", "el"))
 """Head and arms: held at the default pose."""
@@ -142,7 +142,8 @@ def servo_targets(config: PlacoWalkConfig, q_before, q, q_after, gravity) -> np.
     c = config
     qd = (q_after - q_before) / (2 * c.ctrl_dt)
     qdd = (q_after - 2 * q + q_before) / c.ctrl_dt**2
-    tau = c.gravity_feedforward * gravity + c.velocity_feedforward * c.kd * qd + c.inertia_feedforward * c.armature * qdd
+    tau = (c.gravity_feedforward * gravity + c.velocity_feedforward * c.kd * qd
+           + c.inertia_feedforward * c.armature * qdd)
     return q + tau / c.kp
 
 

@@ -9,6 +9,8 @@ import jax
 import mujoco
 import numpy as np
 
+from legged.sensors.native_camera import NativeCamera
+from legged.sensors.native_raycam import render_anywhere
 from legged.sensors.raycam import (
     BALL,
     GOAL,
@@ -22,8 +24,6 @@ from legged.sensors.raycam import (
     poses_of,
     render,
 )
-from legged.sensors.native_camera import NativeCamera
-from legged.sensors.native_raycam import render_anywhere
 from legged.soccer.layout import SoccerLayout
 
 

@@ -1,9 +1,9 @@
-"""OP3 skills learned one at a time, as in the anchors' skill teachers (Haarnoja et al. 2024):
+"""OP3 skills learned one at a time, each a task of its own:
 
 - `op3-walk` (WalkSkillEnv): the walk drill made a training task. The policy reads its proprioception, the
   velocity command and a gait clock, and is rewarded for tracking the command and for imitating the
   reference: the placo gait table's servo targets at the clock's phase and at the command low-pass
-  filtered as the scripted player filters it (legged.soccer.gait_table). With `residual` (the default) its
+  filtered as the scripted player filters it (legged.soccer.placo.gait_table). With `residual` (the default) its
   actions are corrections added to the reference's.
 - `op3-getup` (GetUpSkillEnv): the getup drill made a training task. The robot starts lying and is
   rewarded for raising its torso, turning upright, and standing in the default pose. Its reference is
@@ -12,7 +12,7 @@
 
 Both are drills (legged.soccer.drills: one OP3 on the soccer pitch, the other parked off it), so physics,
 randomisation and falls are the soccer game's own and a trained skill plays its drill unchanged (`legged
-drill walk|getup --player RUN`).
+drill walk|getup --player RUN`). Their configs are legged.skills.config.
 """
 
 from __future__ import annotations
@@ -26,13 +26,13 @@ from brax.envs.base import State
 
 from legged.envs.math import quat_to_mat
 from legged.envs.physics import PhysicsView, Spawn
+from legged.skills.config import LEG_JOINTS, GetUpConfig, WalkSkillConfig
 from legged.soccer.drills import DrillConfig, DrillEnv
-from legged.soccer.gait_table import advance_phase, filter_command, gait_targets
 from legged.soccer.getup_motion import getup_motion, lies_on_back, motion_features, motion_targets
 from legged.soccer.learner import LEARNER
 from legged.soccer.observe import PROPRIO_SIZE, Bodies, read_bodies
-from legged.soccer.placo_player import actions_of
-from legged.soccer.skill_config import LEG_JOINTS, GetUpConfig, WalkSkillConfig
+from legged.soccer.placo.gait_table import advance_phase, filter_command, gait_targets
+from legged.soccer.placo.player import actions_of
 
 
 class SkillEnv(DrillEnv, abc.ABC):

@@ -1,6 +1,6 @@
 """placo's walk as data: the OP3 gait table and its pure lookups, for jitted JAX (MJX) steps or numpy.
 
-The table (`assets/placo/op3_gait.npz`, built offline by legged/soccer/placo_gait_build.py, which runs
+The table (`assets/placo/op3_gait.npz`, built offline by legged/soccer/placo/gait_build.py, which runs
 `PlacoWalk` once per command of a grid) holds:
 
 - `targets[ix, iy, iz, p]`: one steady stride (two steps) of servo targets (OP3.joint_names order, the
@@ -22,7 +22,7 @@ The table (`assets/placo/op3_gait.npz`, built offline by legged/soccer/placo_gai
 The lookups are pure functions of arrays, usable under jit and vmap and with numpy tables and inputs:
 `gait_targets` (multilinear over the command grid, clipped to it; linear over phase, wrapping),
 `planned_speed` (the same over `kin_speed`), `advance_phase`, `filter_command` and `sequence_targets`
-(`start`, `stop` and the kicks of legged/soccer/kick_table.py). A player's memory is then its phase,
+(`start`, `stop` and the kicks of legged/soccer/placo/kick_table.py). A player's memory is then its phase,
 its filtered command and where it is in a start / stop sequence. Importing this module needs no placo.
 """
 
@@ -36,10 +36,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from legged.robots.spec import ASSETS_DIR
-from legged.soccer.npz_tables import load_arrays
+from legged.soccer.placo.npz_tables import load_arrays
 
 GAIT_PATH = ASSETS_DIR / "placo" / "op3_gait.npz"
-"""The committed gait table (regenerate with `python -m legged.soccer.placo_gait_build --out ...`)."""
+"""The committed gait table (regenerate with `python -m legged.soccer.placo.gait_build --out ...`)."""
 
 
 class GaitTable(NamedTuple):

@@ -1,6 +1,6 @@
 """The OP3's kicks as data: the kick table and its pure lookups, for jitted JAX (MJX) steps or numpy.
 
-The table (`assets/placo/op3_kick.npz`, built offline by legged/soccer/placo_kick.py from placo's
+The table (`assets/placo/op3_kick.npz`, built offline by legged/soccer/placo/kick_build.py from placo's
 whole-body IK) holds `targets[side, k]` for side 0 = right foot, 1 = left foot (its mirror image),
 k = 0 .. n-1 at kick phase k / (n - 1), one control period apart. Both ends are the gait table's
 `stand`, so a player can go walk -> stop -> kick -> start -> walk. Importing this needs no placo.
@@ -14,11 +14,11 @@ import jax
 import jax.numpy as jnp
 
 from legged.robots.spec import ASSETS_DIR
-from legged.soccer.gait_table import sequence_targets
-from legged.soccer.npz_tables import load_arrays
+from legged.soccer.placo.gait_table import sequence_targets
+from legged.soccer.placo.npz_tables import load_arrays
 
 KICK_PATH = ASSETS_DIR / "placo" / "op3_kick.npz"
-"""The committed kick table (regenerate with `python -m legged.soccer.placo_kick --out ...`)."""
+"""The committed kick table (regenerate with `python -m legged.soccer.placo.kick_build --out ...`)."""
 SIDES = ("right", "left")
 """Kicking foot of `targets[side]`."""
 

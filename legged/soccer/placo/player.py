@@ -23,9 +23,9 @@ import jax.numpy as jnp
 
 from legged.robots.op3 import OP3, OP3_CTRL_DT
 from legged.soccer.observe import PROPRIO_SIZE
-from legged.soccer.gait_table import (GaitTable, advance_phase, filter_command, gait_targets, load_gait_table,
-                                      sequence_targets)
-from legged.soccer.kick_table import KickTable, advance_kick_phase, kick_targets, load_kick_table
+from legged.soccer.placo.gait_table import (GaitTable, advance_phase, filter_command, gait_targets, load_gait_table,
+                                            sequence_targets)
+from legged.soccer.placo.kick_table import KickTable, advance_kick_phase, kick_targets, load_kick_table
 
 BLEND, START, WALK, STOP, KICK, STAND = range(6)
 """Motion modes of a player's memory."""
@@ -39,9 +39,9 @@ class PlacoTables(NamedTuple):
     """The walk and the kick as data (a pytree: closed over or passed through jit)."""
 
     gait: GaitTable
-    """The gait table (legged.soccer.gait_table)."""
+    """The gait table (legged.soccer.placo.gait_table)."""
     kick: KickTable
-    """The kick table (legged.soccer.kick_table)."""
+    """The kick table (legged.soccer.placo.kick_table)."""
     default_pose: jax.Array
     """(20,) the robot's default pose (episodes start in it)."""
 
