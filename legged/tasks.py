@@ -84,11 +84,12 @@ class TaskEntry:
 
 _GO1 = dict(motor_curve=True)
 """What the Go1 tasks' configs set beyond their classes' defaults (runs saved before it existed load without)."""
-_CONFINED = dict(_GO1, speed_command=True, speed_range=(0.3, 1.0), levels=LevelConfig(), difficulties=LEVELS,
+_CONFINED = dict(_GO1, max_speed=1.0, speed_command=True, speed_range=(0.3, 1.0), levels=LevelConfig(),
+                 difficulties=LEVELS,
                  scan=ScanConfig(x_range=(-0.3, 0.9), y_range=(-0.4, 0.4), spacing=0.05, ceiling_clip=0.3),
                  velocity_in_state=True, gyro_in_state=True)
-"""What the confined tasks' configs set beyond that (runs saved before them load without): each episode draws its
-speed limit from 0.3-1 m/s and the command tells the policy the limit in force; the worlds are the levels d0-d4; the
+"""What the confined tasks' configs set beyond that (runs saved before them load without): a speed limit of 1 m/s,
+each episode drawing its limit from 0.3-1 m/s and the command tells the policy the limit in force; the worlds are the levels d0-d4; the
 height scans reach under the hind feet at 5 cm spacing (half the narrowest void) and read every roof over 0.3 m above
 the base, and open sky, alike; the state holds the body's velocity (as an estimator gives it) and the gyro, so the
 follower sees its own speed against the limit."""

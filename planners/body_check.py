@@ -195,6 +195,15 @@ class BodyChecker:
         first = np.where(reach.any(0), np.argmax(reach, axis=0), 0)
         return np.take_along_axis(heights, first[None], 0)[0]
 
+    def headroom(self, poses) -> np.ndarray:
+        """The highest the body centre of each pose (n, 6) may stand above the floor beneath it with its box (at its
+        tilt) still below the ceiling, metres: how much room the ceiling leaves there."""
+        poses = np.atleast_2d(np.asarray(poses, float))
+        rot = rotation_rpy(poses[:, 3], poses[:, 4], poses[:, 5])
+        top = self._world(poses, rot, self.top_points)
+        room = np.min(self._surface(top, ceiling=True) - (top[..., 2] - poses[:, None, 2]), axis=1)
+        return room - self.maps.floor_at(poses[:, :2])
+
     def codes(self, poses) -> np.ndarray:
         """Validity code of each pose in (n, 6): VALID, OFF_MAP, OUT_OF_REACH, HITS_CEILING or HITS_FLOOR."""
         poses = np.atleast_2d(np.asarray(poses, float))

@@ -36,7 +36,11 @@ def make_planned_env(task: str, planner: PlannerConfig = PlannerConfig(), cache_
         config = dataclasses.replace(config, **overrides)
     if entry.kind != "confined":
         return make(task, config)
+    if config.levels is None:  # a tunnel run saved before the level worlds: planned as it was (no strides, no walls)
+        planner = dataclasses.replace(planner, body=dataclasses.replace(planner.body, stride_slack=0.0,
+                                                                        step_height=None))
     worlds, plans = feasible_worlds(config.num_worlds, config.world_seed, config.difficulties, config.world,
                                     entry.robot, planner, cache_dir, workers, progress=progress, levels=config.levels)
     terrain = Terrain.from_worlds(worlds)
-    return ConfinedEnv(config, entry.robot, terrain, tile_paths(terrain, worlds, plans))
+    return ConfinedEnv(config, entry.robot, terrain, tile_paths(terrain, worlds, plans),
+                       speeds=[plan.speeds for plan in plans])

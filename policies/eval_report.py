@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 
 from legged.tasks import task_entry
+from legged.worlds.levels import LEVELS
 from policies.environments import build_env, soccer_opponent
 from policies.evaluate import (HELD_OUT_SEED_OFFSET, confined_eval_config, evaluate, held_out, latent_probe,
                                nominal_config, on_robot, ood_config, paired_goal_ratio, robot_ratios,
@@ -92,6 +93,11 @@ def check_request(request: EvalRequest, config) -> list[str]:
     confined = task_entry(config.task).kind == "confined"
     if not confined and (request.difficulty is not None or request.world_seed is not None):
         raise ValueError(f"--difficulty and --world-seed apply to confined tasks; {config.task} has no worlds")
+    if confined and config.env.levels is not None and request.difficulty is not None:
+        unknown = sorted(set(request.difficulty) - set(LEVELS))
+        if unknown:
+            raise ValueError(f"--difficulty {unknown} is no level of this run's worlds: levels are "
+                             f"{', '.join(map(str, LEVELS))}")
     if request.ood:
         ood_config(config.env)  # fails now for tasks without dynamics randomisation
         if request.nominal:

@@ -59,12 +59,14 @@ def bench_navigate(scenes_dir, policy_dir, seeds: int = 5, first_seed: int = 0, 
                    max_speed: float | None = None) -> dict:
     """Every scene of `scenes_dir` navigated by the follower `policy_dir` with episode seeds first_seed onward.
     Scene files and the policy are checked before any navigation starts. `max_speed`: the navigations' speed limit,
-    m/s (policies.navigate; default: the run's), which then also replaces `speed`, the limit times to goal are
-    compared at."""
+    m/s (policies.navigate; default: the run's `env.max_speed`); times to goal are compared at the lower of it and
+    `speed`, and the scenes' time limits (written for 1 m/s) stretched by 1 m/s over that speed where it is lower."""
     check_speed_limit(max_speed)
-    speed = speed if max_speed is None else max_speed
     scenes = [read_scene(path) for path in scene_files(scenes_dir)]
-    load_follower(policy_dir, robot, physics)
+    _, run_config = load_follower(policy_dir, robot, physics)
+    limit = run_config.env.max_speed if max_speed is None else max_speed  # what the navigations run at
+    speed = min(speed, limit)
+    stretch = SPEED / speed  # the scenes' time limits are written for SPEED: slower limits get more time
     rows, pooled = [], []
     bar = tqdm(total=len(scenes) * seeds, unit="episode", desc="bench navigate", disable=not progress)
     for model, scene in scenes:
@@ -73,7 +75,8 @@ def bench_navigate(scenes_dir, policy_dir, seeds: int = 5, first_seed: int = 0, 
             maps = navigation_maps(model, scene.start, scene.goal, resolution)
             reports = navigate_seeds(policy_dir, maps, scene.start, scene.goal,
                                      list(range(first_seed, first_seed + seeds)), physics, threads, planner=planner,
-                                     robot=robot, time_limit_s=scene.time_limit_s, progress=bar.update,
+                                     robot=robot, time_limit_s=scene.time_limit_s * stretch,
+                                     progress=bar.update,
                                      max_speed=max_speed)
         except (Unreachable, NavigationError) as exc:  # the planner's failure is the benchmark's result
             rows.append(_unplanned(scene, seeds, str(exc)))

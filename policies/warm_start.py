@@ -32,10 +32,11 @@ within the first few dozen iterations instead of staying the source task's."""
 
 def element_names(layout: list[tuple[str, int]]) -> list[str]:
     """One name per observation element: 'name' for a slice of size 1 (the layout spells the command out
-    component by component), 'name/i' for element i of a longer slice."""
+    component by component), 'name[size]/i' for element i of a longer slice: a slice of another size (a height scan
+    on another grid) is another input, not the same one read at other points."""
     out = []
     for name, size in layout:
-        out.extend([name] if size == 1 else [f"{name}/{i}" for i in range(size)])
+        out.extend([name] if size == 1 else [f"{name}[{size}]/{i}" for i in range(size)])
     return out
 
 

@@ -236,8 +236,8 @@ def _add_speed_option(parser) -> None:
 def _add_level_option(parser) -> None:
     """--level: a generated world of legged.worlds.levels instead of the tunnels."""
     parser.add_argument("--level", type=bounded(int, 0, 4), default=None,
-                        help="a world of level 0-4 instead of --difficulty's tunnels: tunnels; corridors, open sky, "
-                        "crawls; bars, blocks, pillars; steps, ramps, turns; voids")
+                        help="a world of level 0-4 instead of --difficulty's tunnels (it overrides --difficulty): "
+                        "tunnels; corridors, open sky, crawls; bars, blocks, pillars; steps, ramps, turns; voids")
 
 
 def add_navigation_commands(sub) -> None:

@@ -7,7 +7,6 @@ from __future__ import annotations
 import argparse
 import re
 import sys
-import textwrap
 from pathlib import Path
 
 from legged.cli.main import build_parser

@@ -126,12 +126,13 @@ class EnvConfig:
     """Observation noise (the Go1 tasks turn it on)."""
     gyro_in_state: bool = False
     """`state` also holds the IMU's angular velocity (body frame; right after the projected gravity), as a real
-    robot measures it. Off for the tasks whose shipped policies were trained without it; on for go1-rough."""
+    robot measures it. Off by default (the shipped walker was trained without it); on for go1-rough and the confined
+    tasks' new runs."""
     velocity_in_state: bool = False
     """`state` also holds the body's linear velocity in its own frame (first), as a legged robot's state estimator
     (IMU and leg odometry) gives it: with it a walker can see how well it tracks its command and correct for the
-    robot it walks on; without it, it can only replay a gait learned for one set of dynamics. Off for the tasks whose
-    shipped policies were trained without it."""
+    robot it walks on; without it, it can only replay a gait learned for one set of dynamics. Off by default (runs
+    saved before it); on for the confined tasks' new runs."""
     motor_curve: bool = False
     """Limit each servo's torque to its motor's torque-speed line (RobotSpec.motor_speeds): the force limit at rest
     falling to 0 at the motor's free speed when torque and motion agree (braking keeps the force limit); applied to the

@@ -91,10 +91,11 @@ class ConfinedConfig(EnvConfig):
     """... while farther than this from the target (m), a step counts as stalling."""
     command_speed: float = 0.5
     """Commanded speed toward the waypoint in velocity and skills modes, m/s (lowered to the speed limit in force)."""
-    max_speed: float = 1.0
+    max_speed: float = math.inf
     """Speed limit, m/s: exploration pays no horizontal speed beyond it and `rewards.overspeed` charges for the excess.
     A planned path may lower it at some waypoints (ConfinedEnv's `speeds`); the limit in force is the lower of the
-    episode's and the current waypoint's (goal mode: the episode's)."""
+    episode's and the current waypoint's (goal mode: the episode's). The confined tasks set 1 m/s (legged.tasks);
+    inf, no limit, is what runs saved before it existed trained with."""
     speed_command: bool = False
     """The command ends with the speed limit in force (`speed_limit`), so that a policy can obey a limit lower than
     the one it trained at. Off for runs saved before it existed; on for the confined tasks (legged.tasks)."""
@@ -126,7 +127,7 @@ class ConfinedConfig(EnvConfig):
     """Observation noise on `state` (on)."""
 
     def __post_init__(self):
-        if not 0.0 < self.max_speed < math.inf:  # NaN fails here too
+        if not 0.0 < self.max_speed <= math.inf:  # NaN fails here too
             raise ValueError(f"max_speed (the speed limit) must be a positive number of m/s, got {self.max_speed!r}")
         if self.speed_range is not None:
             r = tuple(self.speed_range)

@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from legged.soccer.config import SoccerSceneConfig
-from legged.soccer.config import SoccerConfig
+from legged.soccer.config import SoccerConfig, SoccerSceneConfig
 from legged.soccer.randomize import SoccerRandomization
 
 LEG_JOINTS = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ank_pitch", "ank_roll")
