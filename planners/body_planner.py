@@ -95,8 +95,8 @@ class PlannerConfig:
     body: BodyCheckConfig = BodyCheckConfig()
     """Body-box margin and leg-reach check."""
     crouch_speed: float | None = None
-    """Speed limit at waypoints where the body must crouch (where the ceiling leaves its centre less than the robot's
-    standing height less 3 cm above the floor: under a bar or a low roof), m/s; the plan's `speeds` hand it to the follower (None: no
+    """Speed limit at waypoints where the body must crouch (where the ceiling, less the body-box margin, leaves its
+    centre less than the robot's standing height above the floor: under a bar or a low roof), m/s; the plan's `speeds` hand it to the follower (None: no
     limit of the plan's own)."""
     space: str = "projected"
     """projected: search x, y, yaw, with height, roll and pitch put in the middle of the feasible band
@@ -354,7 +354,7 @@ def _finish(vertices, space, checker, start_pose, goal_pose, config: PlannerConf
         raise PlanningError(f"internal: waypoints {bad.tolist()} of the planned path fail the body check")
     speeds = None
     if config.crouch_speed is not None:
-        crouched = checker.headroom(waypoints) < checker.robot.standing_height - 0.03  # a standing body would not fit
+        crouched = checker.headroom(waypoints) < checker.robot.standing_height  # a standing body would not fit
         speeds = np.where(crouched, config.crouch_speed, np.nan)
     return Plan(waypoints=waypoints, length_m=path_length(waypoints), plan_time_s=float(plan_time), planner=name,
                 speeds=speeds)

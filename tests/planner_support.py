@@ -5,7 +5,9 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 
 import mujoco
+import numpy as np
 
+from legged.worlds.mjcf import TERRAIN_GROUP
 from planners.body_check import quat_rpy
 
 PROBE = "probe_box"
@@ -64,3 +66,14 @@ BOX_TUNNEL = """
 """A 5 m tunnel of boxes: 0.6 m roof, a beam whose underside is 0.34 m above the ground at x = 0.3,
 a 4 cm step on one side, a mesh slab hanging to 0.42 m at x = 1.5, and a decorative (non-colliding)
 sphere the planner must ignore."""
+
+
+def ray_heights(model, data, xy, z_from):
+    """Floor below and ceiling above (x, y, z_from) by MuJoCo's mj_ray, terrain geoms only."""
+    group = np.zeros(6, np.uint8)
+    group[TERRAIN_GROUP] = 1
+    geom = np.zeros(1, np.int32)
+    start = np.array([xy[0], xy[1], z_from])
+    down = mujoco.mj_ray(model, data, start, np.array([0.0, 0.0, -1.0]), group, 1, -1, geom)
+    up = mujoco.mj_ray(model, data, start, np.array([0.0, 0.0, 1.0]), group, 1, -1, geom)
+    return z_from - down, z_from + up

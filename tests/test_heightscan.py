@@ -5,22 +5,11 @@ import numpy as np
 
 from legged.sensors.heightscan import surface_height
 from legged.worlds import Terrain, compile_scene, generate_world
-from legged.worlds.mjcf import TERRAIN_GROUP
+from tests.planner_support import ray_heights
 from legged.robots import GO1
 
 TOLERANCE_M = 1e-5
 """Scan-vs-ray agreement; the height field is stored in float32, so about 1e-7 is expected."""
-
-
-def _ray_heights(model, data, xy, z_from):
-    """Floor below and ceiling above (x, y, z_from) by mj_ray, terrain geoms only."""
-    group = np.zeros(6, np.uint8)
-    group[TERRAIN_GROUP] = 1
-    geom = np.zeros(1, np.int32)
-    start = np.array([xy[0], xy[1], z_from])
-    down = mujoco.mj_ray(model, data, start, np.array([0.0, 0.0, -1.0]), group, 1, -1, geom)
-    up = mujoco.mj_ray(model, data, start, np.array([0.0, 0.0, 1.0]), group, 1, -1, geom)
-    return z_from - down, z_from + up
 
 
 def test_surface_height_matches_mj_ray_on_tiled_terrain():
@@ -36,7 +25,7 @@ def test_surface_height_matches_mj_ray_on_tiled_terrain():
         ceiling = surface_height(terrain.ceiling, terrain.origin, terrain.resolution, xy, anti_diagonal=True)
         if ceiling - floor < 0.02:
             continue  # inside a wall: no free space to cast from
-        ray_floor, ray_ceiling = _ray_heights(model, data, xy, (floor + ceiling) / 2)
+        ray_floor, ray_ceiling = ray_heights(model, data, xy, (floor + ceiling) / 2)
         assert abs(ray_floor - floor) < TOLERANCE_M, xy
         assert abs(ray_ceiling - ceiling) < TOLERANCE_M, xy
         checked += 1
@@ -59,7 +48,7 @@ def test_env_scans_match_mj_ray_at_scan_points(confined):
         obs = np.asarray(state.obs["state"][b])
         ceiling_obs, floor_obs = obs[-2 * n:-n], obs[-n:]
         for k, xy in enumerate(world):
-            ray_floor, ray_ceiling = _ray_heights(env.mj_model, data, xy, base[2])
+            ray_floor, ray_ceiling = ray_heights(env.mj_model, data, xy, base[2])
             clip = scan_cfg.clip
             assert abs(np.clip(ray_floor - base[2], -clip, clip) - floor_obs[k]) < 1e-4
             assert abs(np.clip(ray_ceiling - base[2], -clip, clip) - ceiling_obs[k]) < 1e-4

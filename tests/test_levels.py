@@ -10,7 +10,7 @@ import pytest
 from legged.robots import GO1
 from legged.worlds import Terrain, WorldConfig, WorldError, compile_scene, generate_world
 from legged.worlds.levels import LEVELS, LevelConfig, generate_level, level_layout, make_world
-from legged.worlds.mjcf import TERRAIN_GROUP
+from tests.planner_support import ray_heights
 
 CFG = LevelConfig()
 SEEDS = range(20)
@@ -210,17 +210,6 @@ def test_start_and_goal_on_flat_free_ground(level):
             assert np.all(_free(w)[body])
 
 
-def _ray_heights(model, data, xy, z_from):
-    """Floor below and ceiling above (x, y, z_from) by mj_ray, terrain geoms only."""
-    group = np.zeros(6, np.uint8)
-    group[TERRAIN_GROUP] = 1
-    geom = np.zeros(1, np.int32)
-    start = np.array([xy[0], xy[1], z_from])
-    down = mujoco.mj_ray(model, data, start, np.array([0.0, 0.0, -1.0]), group, 1, -1, geom)
-    up = mujoco.mj_ray(model, data, start, np.array([0.0, 0.0, 1.0]), group, 1, -1, geom)
-    return z_from - down, z_from + up
-
-
 MJCF_WORLDS = [(4, lambda lay: {"bar", "void"} <= set(lay.kinds())),
                (3, lambda lay: {"step", "block"} <= set(lay.kinds()) and lay.bends),
                (2, lambda lay: "pillars" in lay.kinds() and lay.roof is None)]
@@ -250,7 +239,7 @@ def test_mjcf_agrees_with_maps(case):
         floor, ceiling = float(terrain.floor_at(xy)), float(terrain.ceiling_at(xy))
         if ceiling - floor < 0.02:
             continue  # inside a wall or a column
-        rays[k] = _ray_heights(model, data, xy, (floor + ceiling) / 2)
+        rays[k] = ray_heights(model, data, xy, (floor + ceiling) / 2)
         assert abs(rays[k][0] - floor) < 1e-4 and abs(rays[k][1] - ceiling) < 1e-4, xy
     assert len(rays) >= 40
     for k, f in enumerate(lay.features):

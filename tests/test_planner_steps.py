@@ -108,11 +108,11 @@ def test_a_plan_slows_where_the_body_must_crouch():
     low = HeightMaps(floor=np.minimum(maps.floor, ceiling), ceiling=ceiling, resolution=RES, origin=maps.origin)
     config = PlannerConfig(planner="lattice", spacing=0.2, crouch_speed=0.3)
     plan = plan_path(low, (-1.5, 0.0, 0.27), (1.5, 0.0, 0.27), GO1, config)
-    crouched = plan.waypoints[:, 2] < GO1.standing_height - 0.03
-    assert crouched.any() and not crouched.all()
-    np.testing.assert_array_equal(plan.speeds[crouched], 0.3)
-    assert np.isnan(plan.speeds[~crouched]).all()
-    assert plan.to_json()["speeds"].count(None) == (~crouched).sum()
+    x, limited = plan.waypoints[:, 0], ~np.isnan(plan.speeds)
+    assert limited[np.abs(x) < 0.4].all() and not limited[np.abs(x) > 0.4 + 0.3].any()  # under the roof, not away
+    np.testing.assert_array_equal(plan.speeds[limited], 0.3)
+    assert (plan.waypoints[limited & (np.abs(x) < 0.4), 2] < GO1.standing_height - 0.03).all()  # they do crouch
+    assert plan.to_json()["speeds"].count(None) == (~limited).sum()
     assert _plan(maps).speeds is None  # no crouch speed, no limits of the plan's own
     with pytest.raises(PlanningError, match="crouch_speed"):
         PlannerConfig(crouch_speed=0.0).validate()

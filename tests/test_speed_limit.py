@@ -178,7 +178,7 @@ def test_the_shipped_follower_loads_with_its_old_observations(terrain):
     from policies.run_dir import RunDir, RunDirError, check_policy
 
     config = RunDir(FOLLOWER).load_config()
-    assert not config.env.speed_command and config.env.speed_range is None and config.env.max_speed == 1.0
+    assert not config.env.speed_command and config.env.speed_range is None and config.env.max_speed == float("inf")
     policy, _ = load_policy(FOLLOWER)
     env = ConfinedEnv(config.env, terrain=terrain)
     assert "speed_limit" not in env.command_names and len(env.command_names) == 6
