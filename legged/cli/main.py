@@ -334,3 +334,7 @@ def main(argv=None) -> int:
     except (UnknownTaskError, WorldError, OSError, ValueError) as exc:
         print(f"legged {args.command}: error: {' '.join(str(exc).split())}", file=sys.stderr)  # one line
         return 2
+
+
+if __name__ == "__main__":  # python -m legged.cli.main, as python -m legged.cli
+    sys.exit(main())
