@@ -3,6 +3,7 @@ beside bare native physics and (optionally) a peer, all measured in one run."""
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import json
 import subprocess
@@ -11,6 +12,7 @@ import time
 
 import jax
 import jax.numpy as jnp
+import mujoco
 import numpy as np
 
 from legged.envs.native import NativeEnvs, check_threads
@@ -65,7 +67,7 @@ def bench_vector(env, physics: str, batch: int, seconds: float, seed: int, threa
             "diverged_fraction": None if diverged is None else round(float(jnp.mean(diverged)), 4)}
 
 
-def _bench_rollout(env, batch: int, seconds: float, seed: int, threads: int) -> dict:
+def bench_rollout(env, batch: int, seconds: float, seed: int, threads: int) -> dict:
     """Control steps per second of bare native physics: the task's model and spawns, random PD targets,
     `n_substeps` substeps per control step, nothing else."""
     native = NativeEnvs(env, batch, threads)
@@ -79,6 +81,32 @@ def _bench_rollout(env, batch: int, seconds: float, seed: int, threads: int) -> 
         physics.batch.step(nstep=physics.n_substeps)
         steps += 1
     return {"env_steps_per_s": round(steps * batch / (time.perf_counter() - t0), 1), "compile_s": 0.0}
+
+
+PROFILE_TIMERS = ("step", "forward", "position", "pos_kinematics", "pos_inertia", "pos_collision", "col_broad",
+                  "col_narrow", "pos_make", "pos_project", "velocity", "actuation", "constraint", "advance")
+"""MuJoCo's timers (mjData.timer, mjtTimer without its prefix) a physics profile reports, the step first."""
+
+
+def physics_profile(model: mujoco.MjModel, datas: list[mujoco.MjData], steps: int) -> dict:
+    """Where MuJoCo's C engine spends a physics step of `model`, from `steps` steps of each state in `datas` (e.g.
+    environments in the middle of their episodes) with their controls held: microseconds per step of each of
+    PROFILE_TIMERS on one thread, and the mean contacts, constraint rows and solver iterations per step."""
+    totals = dict.fromkeys(PROFILE_TIMERS, 0.0)
+    ncon = nefc = niter = count = 0
+    for data in datas:
+        data = copy.copy(data)
+        for i in range(mujoco.mjtTimer.mjNTIMER):
+            data.timer[i].duration, data.timer[i].number = 0.0, 0
+        for _ in range(steps):
+            mujoco.mj_step(model, data)
+            ncon, nefc, niter, count = ncon + data.ncon, nefc + data.nefc, niter + int(data.solver_niter[0]), count + 1
+        for name in PROFILE_TIMERS:
+            totals[name] += data.timer[getattr(mujoco.mjtTimer, f"mjTIMER_{name.upper()}")].duration
+    return {"physics_steps": count, **{f"{k}_us": round(1e6 * v / max(count, 1), 2) for k, v in totals.items()},
+            "contacts": round(ncon / max(count, 1), 2), "constraint_rows": round(nefc / max(count, 1), 2),
+            "solver_iterations": round(niter / max(count, 1), 2), "solver": mujoco.mjtSolver(model.opt.solver).name,
+            "iterations_limit": int(model.opt.iterations), "timestep": float(model.opt.timestep)}
 
 
 def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0, physics=("mjx", "native"),
@@ -110,7 +138,7 @@ def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0
                 if progress:
                     progress(f"{task}: randomisation {setting}, {p}, batch {batch}: compiling and timing for "
                              f"{seconds:.0f} s")
-                r = _bench_rollout(env, batch, seconds, seed, threads) if p == "rollout" else \
+                r = bench_rollout(env, batch, seconds, seed, threads) if p == "rollout" else \
                     bench_vector(env, p, batch, seconds, seed, threads)
                 by_physics[p] = r = {"task": task, "batch": batch, "physics": p, **r,
                                      "threads": threads if p != "mjx" else None, "ctrl_dt": env.dt,

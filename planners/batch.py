@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from legged.files import atomic_path
 from legged.robots import GO1
 from legged.robots.spec import RobotSpec
 from legged.worlds.generator import World
@@ -60,14 +61,13 @@ def _read(path: Path) -> Plan | PlanningError | None:
 
 def _write(path: Path, result: Plan | PlanningError) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")
-    if isinstance(result, PlanningError):
-        np.savez(tmp, error=str(result))
-    else:
-        extra = {} if result.speeds is None else {"speeds": result.speeds}
-        np.savez(tmp, waypoints=result.waypoints, length_m=result.length_m, plan_time_s=result.plan_time_s,
-                 planner=result.planner, **extra)
-    tmp.replace(path)
+    with atomic_path(path, suffix=".npz") as tmp:  # np.savez would append .npz to any other name
+        if isinstance(result, PlanningError):
+            np.savez(tmp, error=str(result))
+        else:
+            extra = {} if result.speeds is None else {"speeds": result.speeds}
+            np.savez(tmp, waypoints=result.waypoints, length_m=result.length_m, plan_time_s=result.plan_time_s,
+                     planner=result.planner, **extra)
 
 
 def plan_world(world: World, robot: RobotSpec = GO1, config: PlannerConfig = PlannerConfig(),

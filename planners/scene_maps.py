@@ -7,8 +7,9 @@ reference height is the column's gap: the floor is the top of the highest solid 
 the bottom of the lowest solid above it. A column whose reference height lies inside a solid is a wall.
 
 Samples sit on grid points, so a wall edge between two samples would be smoothed into a ramp; the maps
-are therefore dilated by one cell (floor: maximum of the 3 x 3 neighbourhood, ceiling: minimum), which
-makes them conservative. Scenes with several storeys are sampled at the storey of the reference height.
+are therefore dilated by one cell (floor: maximum of the 3 x 3 neighbourhood, ceiling: minimum, with
+`scipy.ndimage.maximum_filter` / `minimum_filter`), which makes them conservative. Scenes with several
+storeys are sampled at the storey of the reference height.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from typing import Callable
 
 import mujoco
 import numpy as np
+from scipy import ndimage
 
 from legged.worlds.maps import HeightMaps
 
@@ -91,13 +93,6 @@ def _solid_intervals(model, data, g, xy, z_bottom, z_top) -> tuple[np.ndarray, n
     return lo, hi
 
 
-def _neighbourhood(grid: np.ndarray, reduce) -> np.ndarray:
-    """3 x 3 neighbourhood maximum or minimum (edges padded with themselves)."""
-    padded = np.pad(grid, 1, mode="edge")
-    windows = np.lib.stride_tricks.sliding_window_view(padded, (3, 3))
-    return reduce(windows, axis=(-2, -1))
-
-
 def maps_from_scene(model: mujoco.MjModel, reference_z: float | Callable[[np.ndarray], np.ndarray],
                     resolution: float = 0.05, bounds=None, dilate: bool = True) -> HeightMaps:
     """Sample the floor and ceiling of a compiled scene on a grid by ray casting (see module docstring).
@@ -146,7 +141,9 @@ def maps_from_scene(model: mujoco.MjModel, reference_z: float | Callable[[np.nda
     floor, ceiling = np.where(wall, wall_top, floor), np.where(wall, wall_top, ceiling)
     floor, ceiling = floor.reshape(shape), ceiling.reshape(shape)
     if dilate:
-        floor, ceiling = _neighbourhood(floor, np.max), _neighbourhood(ceiling, np.min)
+        # 3 x 3 neighbourhood maximum / minimum, edges padded with themselves
+        floor = ndimage.maximum_filter(floor, size=3, mode="nearest")
+        ceiling = ndimage.minimum_filter(ceiling, size=3, mode="nearest")
     return HeightMaps(floor=floor, ceiling=ceiling, resolution=resolution, origin=lo_xy.copy(),
                       ceiling_anti_diagonal=False, source="scene ray casting")
 

@@ -170,11 +170,11 @@ class WorldLabeller(MLPModel):
 
 def teacher_model(teacher: TrainConfig, student: TrainConfig | None = None) -> dict:
     """rsl-rl model config of a distillation's teacher: the `teacher` run's actor (for a state player with
-    command_prior: a PriorCorrector, or a WorldLabeller when its `student` estimates the world)."""
+    soccer.command_prior: a PriorCorrector, or a WorldLabeller when its `student` estimates the world)."""
     cfg = actor_model(teacher, teacher.ppo.init_noise_std)
-    if teacher.command_prior and student is not None and student.estimates_world:
+    if teacher.soccer.command_prior and student is not None and student.estimates_world:
         cfg.update(class_name=WorldLabeller, corrections=COMMAND_SIZE, margin=student.distill.correction_margin)
-    elif teacher.command_prior:
+    elif teacher.soccer.command_prior:
         cfg["class_name"] = PriorCorrector
     return cfg
 
@@ -188,7 +188,7 @@ def weighted_labels(config: TrainConfig) -> dict:
     groups, weights = label_groups(config.env.scene.players_per_team), []
     for name, part in groups.items():
         opponent = name.rstrip("0123456789") == "opponent"  # opponent0, ...; not opponent_goal
-        default = 0.0 if config.drill == "empty-goal" and opponent else 1.0
+        default = 0.0 if config.soccer.drill == "empty-goal" and opponent else 1.0
         weights += [config.distill.label_weights.get(name, default)] * (part.stop - part.start)
     return {"label_groups": {name: (part.start, part.stop) for name, part in groups.items()},
             "label_weights": weights}

@@ -57,14 +57,14 @@ def load_rsl_checkpoint(path: Path) -> dict:
 
 
 def save_rsl_checkpoint(run: RunDir, alg, iteration: int, step: int, obs_sizes: dict, num_actions: int,
-                        opponent_pool: dict | None = None, curriculum_levels: np.ndarray | None = None) -> Path:
-    """Model, optimiser, counters, RNG state, (soccer self-play) the opponent pool and (terrain curricula)
-    each environment's level of the rsl-rl algorithm `alg`, written atomically."""
+                        extra: dict | None = None, curriculum_levels: np.ndarray | None = None) -> Path:
+    """Model, optimiser, counters, RNG state of the rsl-rl algorithm `alg`, what the task family adds (`extra`, e.g.
+    soccer self-play's `opponent_pool`; its arrays stored as tensors) and (terrain curricula) each environment's
+    level, written atomically."""
     buffer = io.BytesIO()
     payload = {"backend": "rsl", "alg": alg.save(), "iteration": iteration, "step": step, "obs_sizes": obs_sizes,
                "num_actions": num_actions, "torch_rng": torch.get_rng_state()}
-    if opponent_pool is not None:
-        payload["opponent_pool"] = as_tensors(opponent_pool)
+    payload.update({k: as_tensors(v) for k, v in (extra or {}).items()})
     if curriculum_levels is not None:
         payload["curriculum_levels"] = torch.from_numpy(np.array(curriculum_levels))  # a writable copy
     torch.save(payload, buffer)
@@ -74,7 +74,7 @@ def save_rsl_checkpoint(run: RunDir, alg, iteration: int, step: int, obs_sizes: 
 def as_tensors(obj):
     """numpy arrays inside nested dicts, lists and tuples as torch tensors (data-only checkpoints)."""
     if isinstance(obj, np.ndarray):
-        return torch.from_numpy(np.ascontiguousarray(obj))
+        return torch.from_numpy(np.array(obj))  # a contiguous, writable copy
     if isinstance(obj, dict):
         return {k: as_tensors(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):

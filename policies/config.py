@@ -8,9 +8,9 @@ from typing import Any, Literal
 
 import yaml
 
-from legged.soccer.vision.estimates import label_groups
 from legged.tasks import default_config, task_entry
 from policies.config_io import ConfigError, from_dict, to_dict
+from policies.soccer.config import SoccerTrainConfig, check_soccer, nest_soccer_keys, soccer_override_path
 
 
 @dataclasses.dataclass(frozen=True)
@@ -55,27 +55,6 @@ class PPOConfig:
     """Running mean/std normalisation of observations (rsl-rl backend; Brax PPO always normalises)."""
     obs_std_floor: float = 0.01
     """Brax backend: least std an observation is divided by (a rare contact force / 1e-6 made the value diverge)."""
-
-
-@dataclasses.dataclass(frozen=True)
-class SelfPlayConfig:
-    """Who the soccer learner plays against (soccer tasks only; the learner is agent 0, see LearnerView)."""
-
-    opponent: Literal["auto", "scripted", "self-play"] = "auto"
-    """self-play: frozen snapshots of the learner drive the other robots (rsl backend, state tasks);
-    scripted: the fixed script; auto: self-play where it applies, else scripted (Brax, vision tasks)."""
-    snapshot_every: int = 10
-    """Iterations between snapshots of the learner's actor into the pool."""
-    pool_size: int = 8
-    """Snapshots kept (the oldest is dropped)."""
-    scripted_fraction: float = 0.2
-    """Chance that a draw picks the script instead of a snapshot (always, while the pool is empty)."""
-    draw_per_game: bool = True
-    """A drawn opponent plays until a game ends (in any environment), so that one with a memory (the placo
-    player's walk and kick) plays whole games; false: a new draw every iteration (what runs before 2026-11-26
-    did; their configs lack the field and resume with the new default)."""
-    script: Literal["placo", "standing"] = "placo"
-    """The script: the placo player (walks to the ball and kicks it) or the standing goalkeeper."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -141,7 +120,7 @@ class DistillConfig:
     teacher_act_iterations: int = 0
     """dagger: iterations over which `teacher_act_fraction` falls linearly to 0 (0: it stays)."""
     label_weights: dict[str, float] = dataclasses.field(default_factory=dict)
-    """dagger students that estimate the game (command_prior=placo): weights of named groups of their labels in
+    """dagger students that estimate the game (soccer.command_prior=placo): weights of named groups of their labels in
     the behaviour loss (`corrections`, `ball`, `ball_vel`, `own_goal`, `opponent_goal`, `teammate0`,
     `opponent0`, ...; groups not listed weigh 1, but the opponents weigh 0 in the empty-goal drill, which has
     none). A mapping: this config is not hashable."""
@@ -149,7 +128,7 @@ class DistillConfig:
     """Students that estimate the game: their corrections' labels are the teacher's command clipped to [-1 - this,
     1 + this] less the placo command at the truth (inf: the raw corrections; 0: as the walker clips)."""
     teacher_prior: bool = False
-    """Set by `legged distill`: the teacher (a state soccer player, command_prior=placo) corrected the placo
+    """Set by `legged distill`: the teacher (a state soccer player, soccer.command_prior=placo) corrected the placo
     player's command (see TrainConfig.game_gives_placo_command for what the vision student's game makes of it)."""
 
 
@@ -182,9 +161,6 @@ class TrainConfig:
     """rsl backend: whenever training starts or resumes, each environment's episode clock starts at a random step
     of its time limit (rsl-rl's init_at_random_ep_len), so that episodes end on different iterations instead of
     all together (e.g. 512 soccer games of 60 s) and every rollout holds every phase of an episode."""
-    drill: str = ""
-    """Soccer-1v1 tasks, rsl backend: train on a drill (legged.soccer.drills) instead of the game: `empty-goal`
-    (the ball 1-2 m before the opponent goal, nobody defending, episodes end at a goal), or '' for the game."""
     device: str = "cpu"
     """PyTorch device of the rsl backend (cpu, cuda, cuda:1, ...)."""
     physics: Literal["mjx", "native"] = "mjx"
@@ -204,31 +180,15 @@ class TrainConfig:
     """Distillation settings (dagger, rma)."""
     env: Any = None
     """The task's environment config (filled in from the task's defaults)."""
-    selfplay: SelfPlayConfig = SelfPlayConfig()
-    """Opponents of the soccer tasks (ignored by the others)."""
-    walker: str = ""
-    """Soccer tasks: run directory of an op3-walk policy; the learner then commands velocities that this frozen
-    walker turns into joint actions (legged.soccer.walker). '' : the learner drives the joints itself."""
-    command_prior: str = ""
-    """Soccer tasks with a walker: `placo` makes the learner's actions corrections added to the placo player's
-    walking command (to the spot behind the ball, lined up on the goal); '' : its actions are the command."""
-    getup: str = ""
-    """Soccer tasks with a walker: how a fallen robot gets up, `script` (ROBOTIS' scripted get-up) or the run
-    directory of an op3-getup policy (needs env.end_on_fall=never, so that a fall does not end the game, and
-    env.scene.limb_floor_contacts=true, as in its training). '' : fallen robots stay down."""
-    pilot: str = ""
-    """Vision students that estimate the game (command_prior=placo): run directory of a state soccer player whose
-    corrections, at the student's estimate, steer it instead of its own (LearnerView.steer_with); eval, view,
-    drill and export load it with the student. Not for training. '' : the student's own corrections."""
-    steered_student: str = ""
-    """State soccer players (command_prior=placo): run directory of a vision student that estimates the game;
-    this player then trains as its pilot, in its camera game on its frozen estimate (policies.steered)."""
+    soccer: SoccerTrainConfig = SoccerTrainConfig()
+    """Soccer tasks only: the skills the player commands (walker, command_prior, getup), its opponents (selfplay),
+    a drill to train on, a vision student's pilot, a pilot's student (policies.soccer.config)."""
 
     @property
     def estimates_world(self) -> bool:
-        """Whether this vision soccer player adds the placo command (command_prior) to its own, computed from its
+        """Whether this vision soccer player adds the placo command (soccer.command_prior) to its own, computed from its
         estimate of the game features, which its actions then hold (legged.soccer.learner)."""
-        return bool(self.command_prior) and bool(getattr(self.env, "vision", False))
+        return bool(self.soccer.command_prior) and bool(getattr(self.env, "vision", False))
 
     @property
     def game_gives_placo_command(self) -> bool:
@@ -244,7 +204,7 @@ class TrainConfig:
     def self_play(self) -> bool:
         """Whether this run trains against snapshots of itself (soccer games, rsl backend, state observations)."""
         entry = task_entry(self.task)
-        if entry.kind != "soccer" or self.selfplay.opponent == "scripted" or self.drill:
+        if entry.kind != "soccer" or self.soccer.selfplay.opponent == "scripted" or self.soccer.drill:
             return False
         return self.backend == "rsl" and not entry.vision
 
@@ -265,16 +225,12 @@ class TrainConfig:
                               "training step); train native physics with --backend rsl")
         if cfg.backend == "brax" and cfg.random_episode_start:
             raise ConfigError("random_episode_start is for --backend rsl (Brax PPO resets its environments itself)")
-        if cfg.drill:
-            _check_drill(cfg, entry)
         if cfg.threads < 0:
             raise ConfigError(f"threads must be >= 1 (or 0 for every core), got {cfg.threads}")
         for name in ("num_envs", "timesteps", "checkpoint_every"):
             if getattr(cfg, name) < 1:
                 raise ConfigError(f"{name} must be >= 1, got {getattr(cfg, name)}")
-        if entry.kind == "soccer" and cfg.selfplay.opponent == "self-play" and (cfg.backend == "brax" or entry.vision):
-            raise ConfigError("selfplay.opponent=self-play needs the rsl backend and a state task (snapshots of the "
-                              "learner are MLPs on the state features); use selfplay.opponent=scripted")
+        check_soccer(cfg, entry)
         _check_ppo(cfg.ppo)
         cfg = _check_algo(cfg, entry)
         if cfg.backend == "brax" and getattr(cfg.env, "curriculum", False):
@@ -287,35 +243,6 @@ class TrainConfig:
         if cfg.num_envs > 2**20 or cfg.timesteps > 10**12:
             raise ConfigError(f"num_envs ({cfg.num_envs}) must be at most {2**20:,} and timesteps ({cfg.timesteps}) "
                               f"at most {10**12:,}")
-        sp = cfg.selfplay
-        if sp.snapshot_every < 1 or sp.pool_size < 1 or not 0.0 <= sp.scripted_fraction <= 1.0:
-            raise ConfigError("selfplay: snapshot_every and pool_size must be >= 1, scripted_fraction in [0, 1]")
-        if sp.script not in ("placo", "standing"):
-            raise ConfigError(f"selfplay.script must be 'placo' or 'standing', got {sp.script!r}")
-        if cfg.walker and (entry.kind != "soccer" or cfg.backend != "rsl"):
-            raise ConfigError(f"walker (an op3-walk run the learner commands) is for soccer tasks with the rsl "
-                              f"backend, not {cfg.task} with {cfg.backend}")
-        if cfg.command_prior not in ("", "placo") or (cfg.command_prior and not cfg.walker):
-            raise ConfigError(f"command_prior must be '' or 'placo' (with walker=OP3_WALK_RUN: corrections to the "
-                              f"placo player's walking command), got {cfg.command_prior!r}"
-                              + ("" if cfg.walker else " without a walker"))
-        if cfg.getup and (not cfg.walker or getattr(cfg.env, "end_on_fall", None) != "never"
-                          or not cfg.env.scene.limb_floor_contacts):
-            raise ConfigError("getup (script or an op3-getup run that stands fallen players up) needs "
-                              "walker=OP3_WALK_RUN, env.end_on_fall=never (else a fall ends the game before anyone gets up) and "
-                              "env.scene.limb_floor_contacts=true (the skill pushes up with its arms and legs)")
-        if cfg.pilot and not cfg.estimates_world:
-            raise ConfigError(f"pilot (a state soccer run steering a vision student from its estimate of the game) "
-                              f"needs a vision student that estimates the game (a soccer vision task, a walker, "
-                              f"command_prior=placo); this run is {cfg.task} with command_prior "
-                              f"{cfg.command_prior!r}")
-        if cfg.pilot in ("placo", "scripted", "self", "teacher", "none"):
-            raise ConfigError(f"pilot={cfg.pilot}: a pilot is the run directory of a state soccer player trained "
-                              f"with command_prior=placo")
-        if cfg.steered_student and (entry.vision or not cfg.command_prior or cfg.backend != "rsl" or cfg.algo != "ppo"):
-            raise ConfigError(f"steered_student (a vision student this player learns to steer) needs a state soccer "
-                              f"task with command_prior=placo, trained by rsl ppo; this run is {cfg.task}, "
-                              f"command_prior {cfg.command_prior!r}, {cfg.backend} {cfg.algo}")
         if cfg.num_envs * cfg.ppo.num_steps_per_env % cfg.ppo.num_mini_batches:
             raise ConfigError(f"num_envs x num_steps_per_env ({cfg.num_envs} x {cfg.ppo.num_steps_per_env}) must "
                               f"divide into num_mini_batches ({cfg.ppo.num_mini_batches})")
@@ -331,15 +258,9 @@ def _check_algo(cfg: TrainConfig, entry) -> TrainConfig:
         raise ConfigError(f"distill.student_memory and distill.student_init are for dagger and kl vision students "
                           f"(legged distill ... --task soccer-1v1-vision --method dagger|kl), not --algo {cfg.algo} "
                           f"on {cfg.task}")
-    if cfg.estimates_world and cfg.algo not in ("dagger", "kl"):
-        raise ConfigError(f"command_prior=placo on a vision task makes the player estimate the ball, goals and "
-                          f"opponent as actions, which only a distilled student learns (legged distill ... --method "
-                          f"dagger|kl), not --algo {cfg.algo}")
     if d.critic_warmup and cfg.algo != "kl":
         raise ConfigError(f"distill.critic_warmup (iterations in which only PPO's critic learns) is for --method kl, "
                           f"not {cfg.algo}")
-    if d.label_weights:
-        _check_label_weights(cfg)
     if d.teacher_act_fraction and cfg.algo != "dagger":
         raise ConfigError(f"distill.teacher_act_fraction (DAgger's beta) is for --method dagger, not {cfg.algo}")
     if cfg.algo == "ppo":
@@ -376,33 +297,6 @@ def _check_algo(cfg: TrainConfig, entry) -> TrainConfig:
     if getattr(cfg.env, "history_steps", None) is None:
         raise ConfigError(f"--algo {cfg.algo} needs a legged task with a state history; {cfg.task} has none")
     return dataclasses.replace(cfg, env=dataclasses.replace(cfg.env, history_steps=history))
-
-
-TRAINING_DRILLS = ("empty-goal",)
-"""Drills a run can train on (walk and getup measure skills whose commands or scripts its policy does not see)."""
-
-
-def _check_drill(cfg: TrainConfig, entry) -> None:
-    """ConfigError unless `cfg.drill` is a drill this run can train on."""
-    if cfg.drill not in TRAINING_DRILLS:
-        raise ConfigError(f"drill must be '' (the game) or one of {', '.join(TRAINING_DRILLS)}, got {cfg.drill!r}")
-    if entry.kind != "soccer" or cfg.env.scene.players_per_team != 1 or cfg.backend != "rsl":
-        raise ConfigError(f"drill={cfg.drill} trains a soccer-1v1 player (soccer-1v1 or soccer-1v1-vision) with the "
-                          f"rsl backend, not {cfg.task} with {cfg.backend}")
-
-
-def _check_label_weights(cfg: TrainConfig) -> None:
-    """ConfigError unless `distill.label_weights` names label groups of this student with weights >= 0."""
-    if not cfg.estimates_world or cfg.algo != "dagger":
-        raise ConfigError("distill.label_weights weighs the labels of a dagger student that estimates the game "
-                          "(legged distill ... --task soccer-1v1-vision --method dagger --set command_prior=placo)")
-    groups = label_groups(cfg.env.scene.players_per_team)
-    unknown = sorted(set(cfg.distill.label_weights) - set(groups))
-    if unknown:
-        raise ConfigError(f"distill.label_weights: no label group(s) {unknown}; the groups are {', '.join(groups)}")
-    bad = {k: w for k, w in cfg.distill.label_weights.items() if not 0.0 <= w <= 1e3}
-    if bad:
-        raise ConfigError(f"distill.label_weights must be in [0, 1000], got {bad}")
 
 
 def _check_distill(d: DistillConfig) -> None:
@@ -450,13 +344,14 @@ MAPPINGS = ("distill.label_weights",)
 
 
 def apply_overrides(config: TrainConfig, overrides: list[str]) -> TrainConfig:
-    """Apply `a.b.c=value` overrides (e.g. `ppo.learning_rate=3e-4`, `env.episode_seconds=10`)."""
+    """Apply `a.b.c=value` overrides (e.g. `ppo.learning_rate=3e-4`, `env.episode_seconds=10`); the paths of the
+    soccer settings from before TrainConfig.soccer (`walker=RUN`, `selfplay.scripted_fraction=0.7`) still work."""
     data = to_dict(config)
     for item in overrides:
         if "=" not in item:
             raise ConfigError(f"override {item!r} must look like path.to.field=value")
         path, text = item.split("=", 1)
-        node, keys = data, path.split(".")
+        node, keys = data, soccer_override_path(path).split(".")
         for key in keys[:-1]:
             if not isinstance(node.get(key), dict):
                 raise ConfigError(f"override {item!r}: {key!r} is not a config section")
@@ -468,8 +363,11 @@ def apply_overrides(config: TrainConfig, overrides: list[str]) -> TrainConfig:
 
 
 def load_config(data: dict) -> TrainConfig:
-    """TrainConfig from its `to_dict` form (as stored in a run's config.yaml)."""
-    data = dict(data)
+    """TrainConfig from its `to_dict` form (as stored in a run's config.yaml; one written before TrainConfig.soccer,
+    with the soccer settings at the top level, is read with them moved there)."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"a config is a mapping of its fields, got {type(data).__name__}")
+    data = nest_soccer_keys(dict(data))
     env = data.pop("env", None)
     cfg = from_dict(TrainConfig, data)
     env_cls = type(default_config(cfg.task))

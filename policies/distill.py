@@ -9,20 +9,19 @@ Two kinds of teacher:
   - rma (Kumar et al. 2021, phase 2): the student's history encoder regresses the teacher's latent z_p of
     the same step, and the student acts with the teacher's head, copied and frozen, fed the state normalised
     as the teacher normalised it (its normaliser is the teacher's, frozen).
-- a state soccer player (soccer-1v1, `--algo ppo`), whose student plays the vision task
-  (`--task soccer-1v1-vision`) from proprioception and the head camera; the teacher reads the state features
-  the vision task gives as `features`. Methods: dagger (as above) and kl (the anchors' KL-regularised RL,
-  policies.teacher_kl). A teacher that commands a walker (`walker`) passes it on: the student commands it too.
-  A teacher whose commands corrected the placo player's (`command_prior`) is taught whole: its student's game
-  observes that command (`command_prior`), the teacher's outputs add it (policies.algorithms.PriorCorrector),
-  and the student, which cannot see the ball's state, learns the whole command from the camera. With
-  `--set command_prior=placo` the student instead estimates what the placo command is computed from: its
-  actions are the teacher's corrections and the game features after the proprioception (ball, goals,
-  opponent), labelled by the teacher's outputs and the truth (policies.algorithms.WorldLabeller), and its game
-  adds the placo command computed from that estimate (legged.soccer.learner). Such a student learns by kl too:
-  PPO on its return plus the KL of its corrections to the teacher's and the squared error of its estimate
-  (policies.teacher_kl), typically started whole from a dagger student (`distill.student_init`,
-  `student_init_whole`) with its critic warmed up first (`distill.critic_warmup`).
+- a state soccer player (soccer-1v1, `--algo ppo`), whose student plays the vision task (`--task soccer-1v1-vision`)
+  from proprioception and the head camera; the teacher reads the state features the vision task gives as `features`.
+  Methods: dagger (as above) and kl (the anchors' KL-regularised RL, policies.teacher_kl). A teacher that commands a
+  walker (`soccer.walker`) passes it on: the student commands it too. A teacher whose commands corrected the placo
+  player's (`soccer.command_prior`) is taught whole: its student's game observes that command (the observation
+  `command_prior`), the teacher's outputs add it (policies.algorithms.PriorCorrector), and the student, which cannot
+  see the ball's state, learns the whole command from the camera. With `--set soccer.command_prior=placo` the
+  student instead estimates what the placo command is computed from: its actions are the teacher's corrections and
+  the game features after the proprioception (ball, goals, opponent), labelled by the teacher's outputs and the
+  truth (policies.algorithms.WorldLabeller), and its game adds the placo command computed from that estimate
+  (legged.soccer.learner). Such a student learns by kl too: PPO on its return plus the KL of its corrections to the
+  teacher's and the squared error of its estimate (policies.teacher_kl), typically started whole from a dagger
+  student (`distill.student_init`, `student_init_whole`) with its critic warmed up first (`distill.critic_warmup`).
 """
 
 from __future__ import annotations
@@ -34,7 +33,6 @@ from pathlib import Path
 import yaml
 
 from policies.config import ConfigError, apply_overrides, to_dict
-from policies.environments import build_env
 from policies.rsl_backend import train_rsl
 from policies.run_dir import RunDir
 from policies.students import (  # noqa: F401 (GroupedLoss, teacher_share: re-exports)
@@ -43,7 +41,7 @@ from policies.students import (  # noqa: F401 (GroupedLoss, teacher_share: re-ex
     teacher_config,
     teacher_share,
 )
-from policies.training import refuse_pilot
+from policies.training import refuse_pilot, training_env
 
 METHODS = ("dagger", "rma", "kl")
 """Distillation methods."""
@@ -61,9 +59,11 @@ def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps:
     if task not in (None, teacher.task):  # a vision student: the teacher's game, seen through the camera
         if method == "rma":
             raise ConfigError("rma regresses a privileged teacher's latent; a vision student learns by dagger or kl")
-        changes.update(task=task, env=dataclasses.replace(teacher.env, vision=True), command_prior="",
-                       selfplay=dataclasses.replace(teacher.selfplay, opponent="scripted"),
-                       distill=dataclasses.replace(changes["distill"], teacher_prior=bool(teacher.command_prior)))
+        soccer = dataclasses.replace(teacher.soccer, command_prior="",
+                                     selfplay=dataclasses.replace(teacher.soccer.selfplay, opponent="scripted"))
+        changes.update(task=task, env=dataclasses.replace(teacher.env, vision=True), soccer=soccer,
+                       distill=dataclasses.replace(changes["distill"],
+                                                   teacher_prior=bool(teacher.soccer.command_prior)))
     for name, value in (("timesteps", timesteps), ("physics", physics), ("num_envs", num_envs), ("threads", threads)):
         if value is not None:
             changes[name] = value
@@ -71,10 +71,10 @@ def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps:
         changes["latent"] = dataclasses.replace(teacher.latent)
     config = apply_overrides(dataclasses.replace(teacher, **changes).resolved(), list(overrides))
     refuse_pilot(config)
-    if config.estimates_world and not teacher.command_prior:  # it adds the placo command itself, from its estimate
-        raise ConfigError(f"command_prior=placo: the student adds the placo command to corrections it learns "
+    if config.estimates_world and not teacher.soccer.command_prior:  # it adds the placo command from its estimate
+        raise ConfigError(f"soccer.command_prior=placo: the student adds the placo command to corrections it learns "
                           f"from a teacher that corrected that command; teacher {teacher_run} did not "
-                          f"(its command_prior is '')")
+                          f"(its soccer.command_prior is '')")
     if method == "rma" and (config.ppo.actor_hidden, config.latent.latent_dim) != \
             (teacher.ppo.actor_hidden, teacher.latent.latent_dim):
         raise ConfigError("rma reuses the teacher's head: ppo.actor_hidden and latent.latent_dim must be the teacher's")
@@ -85,4 +85,5 @@ def start_distill(teacher_run: str, method: str, run_dir: str | None, timesteps:
     (run.path / "teacher.yaml").write_text(yaml.safe_dump(to_dict(teacher), sort_keys=False))  # a record
     if progress:
         print(f"[distill] {method} from {teacher_run} into {run.path}", flush=True)
-    return train_rsl(build_env(config), config, run, resume=False, progress=progress)
+    env, hooks = training_env(config)
+    return train_rsl(env, config, run, resume=False, progress=progress, hooks=hooks)

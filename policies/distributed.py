@@ -6,13 +6,16 @@
 - rsl backend: one process per GPU started by `torchrun --nproc_per_node=G -m legged.cli train ...`.
   Each process steps num_envs / G environments on its own GPU (JAX and torch on the same device),
   rsl-rl averages gradients and the KL-adapted learning rate over the processes (NCCL; gloo on the
-  CPU), and only rank 0 writes the run directory.
+  CPU), and only rank 0 writes the run directory. A checkpoint holds every process's curriculum levels (gathered
+  in rank order), and a resumed run gives each process its own share back.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import os
+
+import numpy as np
 
 from policies.config import ConfigError
 
@@ -56,6 +59,24 @@ class Launch:
         if num_envs % self.world_size:
             raise ConfigError(f"num_envs {num_envs} is not divisible by the {self.world_size} training processes")
         return num_envs // self.world_size
+
+    def gather_rows(self, rows: np.ndarray, device: str = "cpu") -> np.ndarray:
+        """Every process's `rows` (one per environment, the same shape in each process) concatenated in rank order:
+        what a checkpoint saves for all the run's environments. A collective: every process must call it."""
+        if not self.distributed:
+            return rows
+        import torch
+        import torch.distributed as dist
+
+        mine = torch.from_numpy(np.ascontiguousarray(rows)).to(device)
+        every = [torch.empty_like(mine) for _ in range(self.world_size)]
+        dist.all_gather(every, mine)
+        return torch.cat(every).cpu().numpy()
+
+    def own_rows(self, rows: np.ndarray) -> np.ndarray:
+        """This process's share of `rows` saved for all the run's environments in rank order (gather_rows)."""
+        share = len(rows) // self.world_size
+        return rows[self.rank * share:(self.rank + 1) * share]
 
     def multi_gpu_config(self) -> dict | None:
         """rsl-rl's `multi_gpu` config entry."""

@@ -15,19 +15,19 @@ from planners import make_planned_env
 from policies.config import TrainConfig
 from policies.policy_io import load_policy, load_walker
 from policies.run_dir import RunDir
-from policies.selfplay import snapshot_rsl_actor
+from policies.soccer.selfplay import snapshot_rsl_actor
 
 
 def build_env(config: TrainConfig, progress: bool = True):
     """The run's environment as its registry entry says: confined tasks on traversable worlds with planned
     waypoints; soccer tasks as the learner's view of the game (agent 0; the others driven by opponents
-    given to each step) or of `config.drill`, commanding `config.walker` when it names one."""
-    entry = task_entry(config.task)
+    given to each step) or of `config.soccer.drill`, commanding `config.soccer.walker` when it names one."""
+    entry, soccer = task_entry(config.task), config.soccer
     walker = None
-    if config.walker:
-        walker = load_walker(config.walker, config.getup, config.command_prior)
-    if config.drill:  # one player on the pitch doing the drill, the other parked (no opponent to hand it)
-        env = DrillEnv(DrillConfig(name=config.drill), config.env, walker=walker,
+    if soccer.walker:
+        walker = load_walker(soccer.walker, soccer.getup, soccer.command_prior)
+    if soccer.drill:  # one player on the pitch doing the drill, the other parked (no opponent to hand it)
+        env = DrillEnv(DrillConfig(name=soccer.drill), config.env, walker=walker,
                        teacher_prior=config.game_gives_placo_command)
     else:
         if entry.kind == "confined":
@@ -36,14 +36,14 @@ def build_env(config: TrainConfig, progress: bool = True):
             game = make(config.task, config.env)
         env = learner_env(entry, game, config.ppo.activation, config.ppo.actor_hidden, walker,
                           config.game_gives_placo_command)
-    if config.pilot:  # a game or a drill
-        steer_with_pilot(env, config.pilot)
+    if soccer.pilot:  # a game or a drill
+        steer_with_pilot(env, soccer.pilot)
     return env
 
 
 def steer_with_pilot(env, pilot: str) -> None:
     """Let the state soccer run `pilot` steer the vision student's view `env` from its estimate of the game
-    (TrainConfig.pilot); ValueError naming the run if it cannot."""
+    (TrainConfig.soccer.pilot); ValueError naming the run if it cannot."""
     env.steer_with(soccer_opponent(pilot, env, role="pilot"), pilot)
 
 
@@ -63,14 +63,15 @@ def soccer_opponent(spec: str, env, policy=None, role: str = "--opponent"):
     if task_entry(config.task).kind != "soccer" or config.backend != "rsl" or config.algo != "ppo":
         raise ValueError(f"{role} {spec}: a soccer opponent is placo, scripted or an rsl-rl soccer run; this "
                          f"run trained {config.task} with {config.backend}/{config.algo}")
-    if bool(config.walker) != (env.walker is not None):
+    theirs = config.soccer
+    if bool(theirs.walker) != (env.walker is not None):
         mine = "commands a walker" if env.walker is not None else "drives its joints"
         raise ValueError(f"{role} {spec}: the learner {mine}, the opponent run "
-                         f"{'commands a walker' if config.walker else 'drives its joints'}: both must do the same")
-    if bool(config.command_prior) != (env.walker is not None and env.walker.prior is not None):
-        raise ValueError(f"{role} {spec}: its commands are{'' if config.command_prior else ' not'} corrections "
-                         "to the placo player's (command_prior), the learner's are"
-                         f"{' not' if config.command_prior else ''}: both must do the same")
+                         f"{'commands a walker' if theirs.walker else 'drives its joints'}: both must do the same")
+    if bool(theirs.command_prior) != (env.walker is not None and env.walker.prior is not None):
+        raise ValueError(f"{role} {spec}: its commands are{'' if theirs.command_prior else ' not'} corrections "
+                         "to the placo player's (soccer.command_prior), the learner's are"
+                         f"{' not' if theirs.command_prior else ''}: both must do the same")
     policy, _ = load_policy(spec)
     if policy.inputs != ("state",) or policy.obs_sizes["state"] != size:
         raise ValueError(f"{role} {spec}: its actor reads {policy.obs_sizes['state']} state features; the "

@@ -71,7 +71,7 @@ def evaluation_report(request: EvalRequest) -> dict:
     policy, config = load_policy(request.run_dir, request.checkpoint)
     if request.pilot:  # replaces the run's own pilot (none: the student's own corrections)
         pilot = {"teacher": config.distill.teacher, "none": ""}.get(request.pilot, request.pilot)
-        config = dataclasses.replace(config, pilot=pilot).resolved()
+        config = dataclasses.replace(config, soccer=dataclasses.replace(config.soccer, pilot=pilot)).resolved()
     configs = {r: on_robot(config, r) for r in robots}
     report = dict(physics=request.physics, seed=request.seed, checkpoint=str(policy.checkpoint),
                   trained_steps=policy.step, task=config.task)
@@ -110,17 +110,18 @@ def check_request(request: EvalRequest, config) -> list[str]:
                          f"soccer")
     if request.pilot == "teacher" and not config.distill.teacher:
         raise ValueError(f"--pilot teacher: {request.run_dir} was not distilled from a teacher; name a soccer run")
-    if request.compare_teacher and (not soccer or config.drill or not config.distill.teacher):
+    drill = config.soccer.drill
+    if request.compare_teacher and (not soccer or drill or not config.distill.teacher):
         raise ValueError(f"--compare-teacher plays a distilled soccer student's teacher in the same games; "
                          f"{request.run_dir} is not a soccer student distilled from a teacher (task {config.task}"
-                         f"{', drill ' + config.drill if config.drill else ''})")
-    if request.compare_pilot and (not soccer or config.drill or not (request.pilot or config.pilot)
+                         f"{', drill ' + drill if drill else ''})")
+    if request.compare_pilot and (not soccer or drill or not (request.pilot or config.soccer.pilot)
                                   or request.pilot == "none"):
         raise ValueError(f"--compare-pilot plays a piloted vision student's pilot, at the truth, in the same games; "
                          f"{request.run_dir} has no pilot (give one with --pilot RUN)")
-    if config.drill and (request.opponent or request.teammate):
-        raise ValueError(f"{request.run_dir} trained on the {config.drill} drill, where nobody else plays: its eval "
-                         f"plays the drill, without --opponent or --teammate (or use `legged drill {config.drill} "
+    if drill and (request.opponent or request.teammate):
+        raise ValueError(f"{request.run_dir} trained on the {drill} drill, where nobody else plays: its eval "
+                         f"plays the drill, without --opponent or --teammate (or use `legged drill {drill} "
                          f"--player {request.run_dir}`)")
     if (request.compare_teacher or request.compare_pilot) and (request.compare_robots or request.robot != "project"):
         raise ValueError("--compare-teacher and --compare-pilot play on the project's robot model; run them without "
@@ -152,16 +153,16 @@ def _evaluate_run(request: EvalRequest, config, policy) -> dict:
             env_config = nominal_config(env_config)
         env = build_env(dataclasses.replace(config, env=env_config))
         check_policy(policy, env)
-        if config.pilot:
-            report["pilot"] = config.pilot
+        if config.soccer.pilot:
+            report["pilot"] = config.soccer.pilot
         samples = []
-        if config.drill:
-            report["drill"] = config.drill
+        if config.soccer.drill:
+            report["drill"] = config.soccer.drill
         elif soccer:
             report["opponent"] = request.opponent or "scripted"
             if env.game.layout.players_per_team > 1:
                 report["teammate"] = request.teammate or "self"
-        others = _other_players(request, env, policy) if soccer and not config.drill else ()  # a drill: nobody else
+        others = () if not soccer or config.soccer.drill else _other_players(request, env, policy)  # drills: alone
         finals = evaluate(env, policy, request.episodes, request.seed, request.physics, request.num_envs or 16,
                           request.threads, progress=request.progress, probe=samples, env_args=others)
         report = dict(summarize(finals, False), **report)
@@ -170,7 +171,7 @@ def _evaluate_run(request: EvalRequest, config, policy) -> dict:
         if request.compare_teacher:
             report.update(_in_the_same_games(request, config.distill.teacher, finals, "teacher"))
         if request.compare_pilot:
-            report.update(_in_the_same_games(request, config.pilot, finals, "pilot"))
+            report.update(_in_the_same_games(request, config.soccer.pilot, finals, "pilot"))
     else:  # a fixed set of held-out worlds per difficulty, one episode each, every episode to its end
         report["world_seed"] = request.world_seed if request.world_seed is not None else \
             config.env.world_seed + HELD_OUT_SEED_OFFSET

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from legged.files import atomic_path
 from policies.policy_io import Policy, load_policy
 
 PARITY_ATOL = 1e-4
@@ -55,7 +56,6 @@ def export_onnx(policy: Policy, path: str | Path, samples: int = 64, seed: int =
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     module = actor_module(policy)
-    tmp = path.with_name(f".{path.name}.tmp")
     # one ONNX input per observation group the actor reads: `obs` (the state), then e.g. `history` or `camera`
     names = ["obs" if g == "state" else g for g in policy.inputs]
     shape = lambda g: (policy.obs_sizes[g],) if isinstance(policy.obs_sizes[g], int) else tuple(policy.obs_sizes[g])
@@ -66,14 +66,14 @@ def export_onnx(policy: Policy, path: str | Path, samples: int = 64, seed: int =
         dummy = dummy + (module.initial_memory(1),)
     axes = {n: {0: "batch"} for n in names} | {"actions": {0: "batch"}} | \
         ({"memory": {1: "batch"}, "memory_out": {1: "batch"}} if recurrent else {})
-    with warnings.catch_warnings():  # the GRU's batch warning: its initial memory is an input, as it asks
-        warnings.filterwarnings("ignore", message="Exporting a model to ONNX with a batch_size other than 1")
-        torch.onnx.export(module, dummy, str(tmp), input_names=inputs, output_names=outputs, dynamic_axes=axes,
-                          opset_version=18, dynamo=False)
     rng = np.random.default_rng(seed)
     draw = lambda g: (rng.random((samples, *shape(g)), dtype=np.float32) if len(shape(g)) > 1 else
                       rng.normal(size=(samples, *shape(g))).astype(np.float32))  # images in [0, 1]
-    try:
+    with atomic_path(path) as tmp:  # replaced only when the block ends without an error, else removed
+        with warnings.catch_warnings():  # the GRU's batch warning: its initial memory is an input, as it asks
+            warnings.filterwarnings("ignore", message="Exporting a model to ONNX with a batch_size other than 1")
+            torch.onnx.export(module, dummy, str(tmp), input_names=inputs, output_names=outputs, dynamic_axes=axes,
+                              opset_version=18, dynamo=False)
         session = onnxruntime.InferenceSession(str(tmp), providers=["CPUExecutionProvider"])
         policy.reset()
         memory, gap, largest = (module.initial_memory(samples).numpy() if recurrent else None), 0.0, 0.0
@@ -91,9 +91,6 @@ def export_onnx(policy: Policy, path: str | Path, samples: int = 64, seed: int =
         if policy.action_bound is not None and largest > policy.action_bound + 1e-6:
             raise ValueError(f"ONNX export of {policy.checkpoint} returns actions up to {largest:.3g}, outside its "
                              f"+-{policy.action_bound:g}; {path} was left as it was")
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
     return {"onnx": str(path), "checkpoint": str(policy.checkpoint), "backend": policy.backend,
             "obs_size": policy.obs_size, "inputs": inputs, "outputs": outputs, "num_actions": policy.num_actions,
             "max_abs_diff": gap, "samples": samples, "action_bound": policy.action_bound, "max_abs_action": largest}
@@ -106,7 +103,7 @@ def export_run(run_dir: str, checkpoint: str | None = None, out: str | Path | No
     policy, config = load_policy(run_dir, checkpoint)
     out = Path(out or f"{run_dir}/policy.onnx")
     report = export_onnx(policy, out)
-    if config.pilot:
-        pilot, _ = load_policy(config.pilot)
-        report["pilot"] = dict(export_onnx(pilot, out.with_name(f"{out.stem}_pilot.onnx")), run=config.pilot)
+    if config.soccer.pilot:
+        pilot, _ = load_policy(config.soccer.pilot)
+        report["pilot"] = dict(export_onnx(pilot, out.with_name(f"{out.stem}_pilot.onnx")), run=config.soccer.pilot)
     return report

@@ -26,13 +26,17 @@ from __future__ import annotations
 
 import torch
 import torch.nn.functional as F
+from torch.distributions import Normal, kl_divergence
 
 from policies.latent_models import LatentActor
 
 
 def gaussian_kl(mean: torch.Tensor, log_std: torch.Tensor) -> torch.Tensor:
-    """KL(N(mean, std^2) || N(0, I)) per sample, summed over the latent dimensions."""
-    return 0.5 * (mean.square() + (2 * log_std).exp() - 1.0 - 2 * log_std).sum(-1)
+    """KL(N(mean, std^2) || N(0, I)) per sample, summed over the latent dimensions: torch's
+    `kl_divergence(Normal(mean, exp(log_std)), Normal(0, 1))`. Arguments are not validated, so a non-finite latent
+    gives a non-finite loss (which the trainer's divergence guard stops on) rather than an error."""
+    return kl_divergence(Normal(mean, log_std.exp(), validate_args=False),
+                         Normal(0.0, 1.0, validate_args=False)).sum(-1)
 
 
 def info_nce(z_proj: torch.Tensor, p_embed: torch.Tensor, temperature: float,

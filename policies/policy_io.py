@@ -26,10 +26,10 @@ from policies.checkpoints import fill, load_brax_checkpoint, load_rsl_checkpoint
 from policies.config import TrainConfig
 from policies.latent_models import deployed_actor, deployed_features
 from policies.run_dir import RunDir, RunDirError
-from policies.selfplay import snapshot_rsl_actor
+from policies.soccer.selfplay import snapshot_rsl_actor
 
 GETUP_SCRIPT = "script"
-"""`getup=script`: soccer players get up by ROBOTIS' scripted get-up alone (legged.soccer.getup_motion)."""
+"""`soccer.getup=script`: soccer players get up by ROBOTIS' scripted get-up alone (legged.soccer.getup_motion)."""
 
 
 @dataclasses.dataclass
@@ -113,10 +113,10 @@ def action_bound(config: TrainConfig) -> float | None:
     entry = task_entry(config.task)
     if not entry.bounded_actions:
         return None
-    if entry.kind == "soccer" and config.walker:
-        if config.command_prior and config.env.vision:
+    if entry.kind == "soccer" and config.soccer.walker:
+        if config.soccer.command_prior and config.env.vision:
             return None
-        return COMMAND_BOUND + (prior_reach(config.walker) if config.command_prior else 0.0)
+        return COMMAND_BOUND + (prior_reach(config.soccer.walker) if config.soccer.command_prior else 0.0)
     return float(config.env.action_clip)
 
 

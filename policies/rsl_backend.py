@@ -15,8 +15,6 @@ from tqdm import tqdm
 
 from legged.envs.native import default_threads
 from legged.envs.vector import VectorEnv
-from legged.tasks import task_entry
-from policies import selfplay  # the module: its functions are looked up when called (tests replace them)
 from policies.algorithms import (  # noqa: F401 (build_ppo, dummy_observations: re-exports)
     attach_information_bottleneck,
     attach_teacher_kl,
@@ -33,17 +31,20 @@ from policies.latent_models import latent_features
 from policies.probe import probe_r2
 from policies.rsl_vecenv import RslVecEnv
 from policies.run_dir import RunDir, TrainingDiverged, check_compatible
-from policies.steered import SteeredView
 from policies.students import load_teacher, start_student
+from policies.training_hooks import TrainingHooks
 from policies.warm_start import warm_start
 
 
-def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progress: bool = True) -> dict:
-    """Train (or continue training) `env` with rsl-rl PPO; returns the last metrics record.
+def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progress: bool = True,
+              hooks: TrainingHooks | None = None) -> dict:
+    """Train (or continue training) `env` with rsl-rl (PPO or a distillation); returns the last metrics record.
 
-    Under torchrun every process runs this with its share of the environments (policies.distributed);
-    only rank 0 logs and writes checkpoints.
+    The loop is the same for every task: what a task family adds (opponents, the game a pilot plays in) comes
+    through `hooks` (policies.training_hooks; the defaults add nothing). Under torchrun every process runs this
+    with its share of the environments (policies.distributed); only rank 0 logs and writes checkpoints.
     """
+    hooks = hooks or TrainingHooks()
     ppo = config.ppo
     launch = Launch.from_env()
     local_envs = launch.envs_per_process(config.num_envs)
@@ -61,27 +62,113 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     threads = config.threads or default_threads()
     if config.physics == "native":
         torch.set_num_threads(threads)
-    played = env.view if isinstance(env, SteeredView) else env  # a pilot learns in its vision student's game
-    vector = VectorEnv.of(played, local_envs, config.physics, threads)
+    vector = VectorEnv.of(hooks.played_env(env), local_envs, config.physics, threads)
     key = jax.random.fold_in(jax.random.fold_in(jax.random.PRNGKey(config.seed), iteration), launch.rank)
     hib = config.algo in ("hib", "hib-no-ib")
     levels = None if payload is None else payload.get("curriculum_levels")
-    if levels is not None and (launch.distributed or len(levels) != local_envs):
-        levels = None  # saved for another number of environments: they start again from the easiest row
-    venv = RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device,
-                     latent_noise=config.latent.latent_dim if hib else 0,
-                     levels=None if levels is None else levels.numpy())
-    if played is not env:
-        venv = env.vec_env(venv)
+    if levels is not None:  # every process's levels, in rank order; saved for another number of environments,
+        levels = launch.own_rows(levels.numpy()) if len(levels) == config.num_envs else None  # they start afresh
+    venv = hooks.wrap(RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device,
+                                latent_noise=config.latent.latent_dim if hib else 0, levels=levels))
     if config.random_episode_start:  # episodes end on different iterations
         generator = torch.Generator().manual_seed(config.seed + launch.rank + 7919 * iteration)
         venv.episode_length_buf = torch.randint(0, env.config.episode_steps, (local_envs,), generator=generator)
-    teacher = None
-    if config.algo in DISTILL_ALGOS:
-        teacher = load_teacher(config, env)
-    alg = build_algorithm(config, venv.get_observations(), local_envs, env.action_size, device, launch,
+    alg = start_algorithm(env, config, venv, payload, iteration, launch, device, progress)
+    hooks.start(venv, payload, iteration, launch.rank)
+    if launch.distributed:
+        alg.broadcast_parameters()  # every process starts from rank 0's networks
+    writer = SummaryWriter(str(run.path / "tb")) if launch.is_main else None
+    record = {}
+    bar = tqdm(total=iterations * per_iteration, initial=step, unit="step", unit_scale=True,
+               desc=f"{config.task} rsl", disable=not (progress and launch.is_main))
+    obs = venv.get_observations()
+    alg.train_mode()
+    layout = env.observation_layout() if config.algo != "ppo" and hasattr(env, "observation_layout") else None
+    if layout is not None and not privileged_slices(layout):  # no randomised dynamics to probe (soccer)
+        layout = None
+    earlier = run.metrics() if resume else []
+    wall0 = time.perf_counter() - ((earlier[-1].get("wall_s") or 0.0) if earlier else 0.0)  # resumed runs go on
+    clock = time.perf_counter
+    saving = 0.0  # seconds the last iteration's record and checkpoint took to write
+    try:
+        while iteration < iterations:
+            t0 = clock()
+            physics0 = venv.physics_seconds()
+            stepping = 0.0
+            reward_sum = torch.zeros((), device=device)
+            hooks.before_rollout(venv)
+            with torch.inference_mode():
+                for _ in range(ppo.num_steps_per_env):
+                    actions = alg.act(obs)
+                    t_env = clock()
+                    obs, rewards, dones, extras = venv.step(actions)
+                    stepping += clock() - t_env
+                    alg.process_env_step(obs, rewards, dones, extras)
+                    reward_sum += rewards.mean()
+                    hooks.after_step(dones)
+                t_update = clock()
+                alg.compute_returns(obs)
+            diagnostics = {}
+            if layout is not None and (iteration + 1) % config.checkpoint_every == 0:
+                diagnostics = probe_rollout(alg, layout)
+            losses = alg.update()
+            timing = _timing(t0, t_update, clock(), stepping, venv.physics_seconds(), physics0, saving)
+            extension = getattr(alg, "symmetry", None)
+            if hasattr(extension, "means"):  # HIB's information bottleneck, a kl student's pull to its teacher
+                diagnostics.update(extension.means())
+            if hasattr(extension, "end_iteration"):
+                extension.end_iteration()
+            diverged = non_finite(losses, alg)
+            iteration += 1
+            hooks.after_update(alg, iteration)
+            step += per_iteration
+            elapsed = time.perf_counter() - t0
+            record = {"step": step, "iteration": iteration, "episode_return": None, "episode_length": None,
+                      **venv.episode_stats.means(),
+                      "reward_per_step": float(reward_sum) / ppo.num_steps_per_env,
+                      "steps_per_s": per_iteration / elapsed, "wall_s": time.perf_counter() - wall0,
+                      "learning_rate": alg.learning_rate,
+                      "action_std": float(alg.get_policy().output_std.detach().mean()),
+                      **{f"loss_{k}": float(v) for k, v in losses.items() if k != "symmetry"}, **diagnostics,
+                      **timing, **hooks.record(venv)}
+            bar.update(per_iteration)
+            bar.set_postfix(ret=_short(record["episode_return"]), sps=f"{record['steps_per_s']:.0f}")
+            if diverged:
+                if launch.is_main:
+                    run.log(record, writer)
+                last = run.checkpoints()
+                raise TrainingDiverged(
+                    f"training diverged at iteration {iteration} ({diverged}); nothing was saved after it. "
+                    + (f"The last good checkpoint is {last[-1]}: resume with `legged train --resume {run.path}`"
+                       " (perhaps after lowering ppo.learning_rate in its config.yaml)" if last else
+                       "No checkpoint was written yet."))
+            t_save = clock()
+            checkpoint = iteration % config.checkpoint_every == 0 or iteration == iterations
+            levels = venv.curriculum_levels() if checkpoint else None
+            if levels is not None:
+                levels = launch.gather_rows(levels, device)  # every process takes part; rank 0 saves them all
+            if not launch.is_main:
+                continue
+            run.log(record, writer)
+            if checkpoint:
+                save_checkpoint(run, alg, iteration, step, obs_sizes, env.action_size, extra=hooks.saved_state(),
+                                curriculum_levels=levels)
+            saving = clock() - t_save
+    finally:
+        bar.close()
+        if writer is not None:
+            writer.close()
+    return record
+
+
+def start_algorithm(env, config: TrainConfig, venv, payload: dict | None, iteration: int, launch: Launch,
+                    device: str, progress: bool):
+    """The run's rsl-rl algorithm (PPO or a distillation) with its networks: a resumed checkpoint's (`payload`),
+    a teacher-pulled student's, a warm start's (config.init_from), or new ones."""
+    teacher = load_teacher(config, env) if config.algo in DISTILL_ALGOS else None
+    alg = build_algorithm(config, venv.get_observations(), venv.num_envs, env.action_size, device, launch,
                           teacher=None if teacher is None else teacher[0])
-    if hib:
+    if config.algo in ("hib", "hib-no-ib"):
         attach_information_bottleneck(alg, config, env.observation_layout(), seed=config.seed + 7 * iteration)
     if config.algo == "kl":
         attach_teacher_kl(alg, config, *teacher, venv.get_observations(), env.action_size, iteration)
@@ -100,94 +187,19 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         note = warm_start(alg, Path(config.init_from), env, venv.get_observations(), config.task)
         if progress and launch.is_main:
             print(note)
-    pool = None
-    if config.self_play:
-        pool = selfplay.OpponentPool(config.selfplay, env.game.policy_state_size, env.player_action_size,
-                                     ppo.actor_hidden, seed=config.seed + launch.rank + 7919 * iteration)
-        if payload is not None and "opponent_pool" in payload:
-            pool.load_state_dict(payload["opponent_pool"])
-    elif task_entry(config.task).kind == "soccer" and not config.drill:  # the configured script plays every game
-        venv.env_args = selfplay.script_opponents(config.selfplay, env.game.policy_state_size, env.player_action_size,
-                                         env.game.layout.players_per_team)
-    if launch.distributed:
-        alg.broadcast_parameters()  # every process starts from rank 0's networks
-    writer = SummaryWriter(str(run.path / "tb")) if launch.is_main else None
-    record = {}
-    bar = tqdm(total=iterations * per_iteration, initial=step, unit="step", unit_scale=True,
-               desc=f"{config.task} rsl", disable=not (progress and launch.is_main))
-    obs = venv.get_observations()
-    alg.train_mode()
-    opponent, game_over = None, False  # the pool's draw, and whether a game ended since it was drawn
-    layout = env.observation_layout() if config.algo != "ppo" and hasattr(env, "observation_layout") else None
-    if layout is not None and not privileged_slices(layout):  # no randomised dynamics to probe (soccer)
-        layout = None
-    earlier = run.metrics() if resume else []
-    wall0 = time.perf_counter() - ((earlier[-1].get("wall_s") or 0.0) if earlier else 0.0)  # resumed runs go on
-    try:
-        while iteration < iterations:
-            t0 = time.perf_counter()
-            reward_sum = torch.zeros((), device=device)
-            if pool is not None and (opponent is None or game_over or not config.selfplay.draw_per_game):
-                opponent, data = pool.sample()
-                venv.env_args = (data, pool.teammate()) if env.game.layout.players_per_team > 1 else (data,)
-            game_over = False
-            with torch.inference_mode():
-                for _ in range(ppo.num_steps_per_env):
-                    actions = alg.act(obs)
-                    obs, rewards, dones, extras = venv.step(actions)
-                    alg.process_env_step(obs, rewards, dones, extras)
-                    reward_sum += rewards.mean()
-                    game_over = game_over or bool(dones.any())
-                alg.compute_returns(obs)
-            diagnostics = {}
-            if layout is not None and (iteration + 1) % config.checkpoint_every == 0:
-                diagnostics = probe_rollout(alg, layout)
-            losses = alg.update()
-            extension = getattr(alg, "symmetry", None)
-            if hasattr(extension, "means"):  # HIB's information bottleneck, a kl student's pull to its teacher
-                diagnostics.update(extension.means())
-            if hasattr(extension, "end_iteration"):
-                extension.end_iteration()
-            diverged = non_finite(losses, alg)
-            iteration += 1
-            if pool is not None and iteration % config.selfplay.snapshot_every == 0:
-                pool.add(selfplay.snapshot_rsl_actor(alg.get_policy()))
-            step += per_iteration
-            elapsed = time.perf_counter() - t0
-            record = {"step": step, "iteration": iteration, "episode_return": None, "episode_length": None,
-                      **venv.episode_stats.means(),
-                      "reward_per_step": float(reward_sum) / ppo.num_steps_per_env,
-                      "steps_per_s": per_iteration / elapsed, "wall_s": time.perf_counter() - wall0,
-                      "learning_rate": alg.learning_rate,
-                      "action_std": float(alg.get_policy().output_std.detach().mean()),
-                      **{f"loss_{k}": float(v) for k, v in losses.items() if k != "symmetry"}, **diagnostics}
-            if pool is not None:
-                record.update(opponent=opponent, opponent_pool=len(pool.snapshots))
-            elif venv.env_args:
-                record.update(opponent=-1)
-            bar.update(per_iteration)
-            bar.set_postfix(ret=_short(record["episode_return"]), sps=f"{record['steps_per_s']:.0f}")
-            if diverged:
-                if launch.is_main:
-                    run.log(record, writer)
-                last = run.checkpoints()
-                raise TrainingDiverged(
-                    f"training diverged at iteration {iteration} ({diverged}); nothing was saved after it. "
-                    + (f"The last good checkpoint is {last[-1]}: resume with `legged train --resume {run.path}`"
-                       " (perhaps after lowering ppo.learning_rate in its config.yaml)" if last else
-                       "No checkpoint was written yet."))
-            if not launch.is_main:
-                continue
-            run.log(record, writer)
-            if iteration % config.checkpoint_every == 0 or iteration == iterations:
-                save_checkpoint(run, alg, iteration, step, obs_sizes, env.action_size,
-                                opponent_pool=None if pool is None else pool.state_dict(),
-                                curriculum_levels=venv.curriculum_levels())
-    finally:
-        bar.close()
-        if writer is not None:
-            writer.close()
-    return record
+    return alg
+
+
+def _timing(start: float, update: float, end: float, stepping: float, physics: float | None,
+            physics0: float | None, saving: float) -> dict:
+    """Where an iteration's wall time went, in seconds: `time_physics_s` in MuJoCo's C engine (native physics
+    only), `time_env_s` in the environment's steps beyond it (the task's transition, observations, rewards,
+    resets; on MJX the physics too), `time_policy_s` in the rest of the rollout (the actor's inference, rsl-rl's
+    storage, the hooks), `time_update_s` in the returns and the networks' update, and `time_saving_s` in writing
+    the PREVIOUS iteration's record and checkpoint (this one's are written after its record)."""
+    in_engine = None if physics is None else physics - physics0
+    return {"time_physics_s": in_engine, "time_env_s": stepping - (in_engine or 0.0),
+            "time_policy_s": update - start - stepping, "time_update_s": end - update, "time_saving_s": saving}
 
 
 def probe_rollout(alg, layout: dict) -> dict:

@@ -87,6 +87,10 @@ class RslVecEnv(VecEnv):
         self.env_args = ()
         """Extra arguments of every env step (a soccer LearnerView's opponent), set between iterations."""
 
+    def physics_seconds(self) -> float | None:
+        """Wall time in MuJoCo's C engine so far (None on MJX): VectorEnv.physics_seconds."""
+        return self.vector.physics_seconds()
+
     def curriculum_levels(self) -> np.ndarray | None:
         """Each environment's terrain-curriculum level (None for tasks without one), saved with checkpoints so
         that a resumed run goes on where it was rather than from the easiest row."""

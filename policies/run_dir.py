@@ -16,6 +16,7 @@ from pathlib import Path
 
 import yaml
 
+from legged.files import TEMP_GLOB, write_atomic, writer_pid
 from policies.config import ConfigError, TrainConfig, load_config, to_dict
 
 CHECKPOINT = re.compile(r"^step_(\d{12})\.(pt|npz|pkl)$")
@@ -80,7 +81,7 @@ class RunDir:
             probe.unlink()
         except OSError as exc:
             raise RunDirError(f"run directory {self.path} is not writable: {exc.strerror}") from None
-        self._atomic_write(self.config_path, yaml.safe_dump(to_dict(config), sort_keys=False).encode())
+        write_atomic(self.config_path, yaml.safe_dump(to_dict(config), sort_keys=False).encode())
         return self
 
     def discard_unstarted(self) -> bool:
@@ -88,7 +89,7 @@ class RunDir:
         a warm start that did not fit), so that the same command can be run again; True if removed."""
         if self.checkpoints() or self.metrics_path.exists():
             return False
-        for leftover in (self.config_path, *self.path.glob(".*.tmp"), *self.checkpoint_dir.glob(".*.tmp"),
+        for leftover in (self.config_path, *self.path.glob(TEMP_GLOB), *self.checkpoint_dir.glob(TEMP_GLOB),
                          *(self.path / "tb").glob("events.out.tfevents.*")):
             leftover.unlink(missing_ok=True)
         for folder in (self.checkpoint_dir, self.path / "tb", self.path):
@@ -156,31 +157,22 @@ class RunDir:
 
     def write_checkpoint(self, step: int, suffix: str, payload: bytes) -> Path:
         """Write a checkpoint atomically (a killed run never leaves a half-written file under the real name)."""
-        path = self.checkpoint_path(step, suffix)
-        self._atomic_write(path, payload)
-        return path
+        return write_atomic(self.checkpoint_path(step, suffix), payload)
 
     def clean_stale(self) -> list[Path]:
-        """Remove temporary files that killed processes left behind (`.<name>.<pid>.tmp`); returns them."""
+        """Remove temporary files that killed processes left behind (`.<name>.<random>.<pid>.tmp`, written by
+        `legged.files.write_atomic`); returns them. A file whose writer still runs is left alone."""
         removed = []
-        for tmp in list(self.path.glob(".*.tmp")) + list(self.checkpoint_dir.glob(".*.tmp")):
-            try:
-                pid = int(tmp.name.rsplit(".", 2)[-2])
-                os.kill(pid, 0)  # still running: its file is being written
-                continue
-            except (ValueError, ProcessLookupError):
-                pass
-            except PermissionError:  # another user's live process
-                continue
+        for tmp in list(self.path.glob(TEMP_GLOB)) + list(self.checkpoint_dir.glob(TEMP_GLOB)):
+            pid = writer_pid(tmp.name)
+            if pid is not None:
+                try:
+                    os.kill(pid, 0)  # still running: its file is being written
+                    continue
+                except ProcessLookupError:
+                    pass
+                except PermissionError:  # another user's live process
+                    continue
             tmp.unlink(missing_ok=True)
             removed.append(tmp)
         return removed
-
-    @staticmethod
-    def _atomic_write(path: Path, payload: bytes) -> None:
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        with open(tmp, "wb") as f:
-            f.write(payload)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)

@@ -7,22 +7,25 @@ from pathlib import Path
 
 import jax
 
+from legged.tasks import task_entry
 from policies.config import ConfigError, TrainConfig, apply_overrides
 from policies.distributed import Launch, init_jax_processes
 from policies.environments import build_env  # looked up when a run starts: tests replace it with a small env
 from policies.rsl_backend import train_rsl
 from policies.run_dir import RunDir
-from policies.steered import steered_env
+from policies.soccer.hooks import SoccerHooks, SteeredHooks
+from policies.soccer.steered import steered_env
+from policies.training_hooks import TrainingHooks
 
 
 def refuse_pilot(config: TrainConfig) -> None:
     """ConfigError if `config` names a pilot and does not distil by DAgger: a piloted vision student is played
     (eval, view, drill, export) and can learn its estimate by DAgger in the games its pilot steers (the labels
     do not depend on who acts), but PPO and kl would learn corrections the pilot throws away."""
-    if config.pilot and config.algo != "dagger":
-        raise ConfigError(f"pilot={config.pilot}: a state pilot steers a trained vision student in eval, view, drill "
-                          f"and export, and in DAgger (--method dagger); train or distil by {config.algo} without "
-                          f"it (--set pilot=)")
+    if config.soccer.pilot and config.algo != "dagger":
+        raise ConfigError(f"soccer.pilot={config.soccer.pilot}: a state pilot steers a trained vision student in "
+                          f"eval, view, drill and export, and in DAgger (--method dagger); train or distil by "
+                          f"{config.algo} without it (--set soccer.pilot=)")
 
 
 def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> dict:
@@ -30,9 +33,18 @@ def _train(config: TrainConfig, run: RunDir, resume: bool, progress: bool) -> di
         from policies.brax_backend import train_brax  # Brax's PPO takes a second to import: brax runs only
 
         return train_brax(build_env(config), config, run, resume=resume, progress=progress)
-    if config.steered_student:  # a pilot, trained in its vision student's game (policies.steered)
-        return train_rsl(steered_env(config), config, run, resume=resume, progress=progress)
-    return train_rsl(build_env(config), config, run, resume=resume, progress=progress)
+    env, hooks = training_env(config)
+    return train_rsl(env, config, run, resume=resume, progress=progress, hooks=hooks)
+
+
+def training_env(config: TrainConfig) -> tuple:
+    """(environment, TrainingHooks) of an rsl run: the task's environment and what its family adds to the loop
+    (soccer: opponents; a pilot: its vision student's game, policies.soccer.steered)."""
+    if config.soccer.steered_student:
+        env = steered_env(config)
+        return env, SteeredHooks(config, env)
+    env = build_env(config)
+    return env, SoccerHooks(config, env) if task_entry(config.task).kind == "soccer" else TrainingHooks()
 
 
 def _prepare(config: TrainConfig) -> bool:

@@ -50,7 +50,7 @@ def files(tmp_path_factory):
 
 FOLLOWER = str(Path(__file__).resolve().parents[1] / "assets" / "policies" / "go1-confined-follower")
 PILOTED = str(Path(__file__).resolve().parents[1] / "assets" / "policies" / "op3-soccer-1v1-vision-piloted")
-"""A vision student steered by a state pilot (TrainConfig.pilot)."""
+"""A vision student steered by a state pilot (TrainConfig.soccer.pilot)."""
 """The shipped waypoint follower (navigate's bad-input cases need a policy that can navigate)."""
 
 
@@ -145,11 +145,11 @@ CASES = {
     "eval: pilot of a flat task": (["eval", "{d}/run", "--pilot", "teacher"], "apply to soccer vision students"),
     "eval: compare with no pilot": (["eval", "{d}/run", "--compare-pilot"], "has no pilot"),
     "eval: placo as a pilot": (["eval", PILOTED, "--pilot", "placo"], "a pilot is the run directory"),
-    "train: pilot of a state player": (["train", "soccer-1v1", "--set", "pilot=" + PILOTED, "--run-dir", "{d}/t9"],
-                                       "needs a vision student that estimates the game"),
+    "train: pilot of a state player": (["train", "soccer-1v1", "--set", "soccer.pilot=" + PILOTED, "--run-dir",
+                                        "{d}/t9"], "needs a vision student that estimates the game"),
     "distill: with a pilot": (["distill", PILOTED.replace("-vision-piloted", ""), "--task", "soccer-1v1-vision",
-                               "--method", "kl", "--set", "command_prior=placo", "--set", "pilot=" + PILOTED,
-                               "--run-dir", "{d}/t10"], "distil by kl without it"),
+                               "--method", "kl", "--set", "soccer.command_prior=placo", "--set",
+                               "soccer.pilot=" + PILOTED, "--run-dir", "{d}/t10"], "distil by kl without it"),
     "eval: oracle of a flat task": (["eval", "{d}/run", "--oracle", "ball"], "apply to soccer vision students"),
     "eval: tracker of a flat task": (["eval", "{d}/run", "--tracker"], "apply to soccer vision students"),
     "eval: teacher of a flat task": (["eval", "{d}/run", "--compare-teacher"], "not a soccer student distilled"),

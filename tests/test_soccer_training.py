@@ -6,13 +6,14 @@ import pytest
 import torch
 
 from policies import training
-from policies.config import ConfigError, PPOConfig, SelfPlayConfig, TrainConfig, apply_overrides
+from policies.config import ConfigError, PPOConfig, TrainConfig, apply_overrides
 from policies.evaluate import summarize
 from policies.export import export_onnx
 from policies.policy_io import load_policy
 from policies.rsl_backend import build_ppo, dummy_observations, save_checkpoint
 from policies.algorithms import actor_inputs
 from policies.run_dir import RunDir
+from policies.soccer.config import SelfPlayConfig
 
 TINY = ["env.episode_seconds=0.25", "ppo.num_steps_per_env=5", "ppo.num_mini_batches=2", "checkpoint_every=1",
         "ppo.actor_hidden=[16]", "ppo.critic_hidden=[16]"]
@@ -30,8 +31,9 @@ def test_self_play_snapshots_become_opponents_without_recompiling(tmp_path, monk
     monkeypatch.setattr(env, "prepare", lambda *args: (traces.append(len(args)), real_prepare(*args))[1])
     run_dir = tmp_path / "selfplay"
     training.start_run("soccer-1v1", str(run_dir), num_envs=2, timesteps=30, progress=False, physics="native",
-                       threads=1, overrides=TINY + ["selfplay.snapshot_every=1", "selfplay.scripted_fraction=0.0",
-                                                    "selfplay.draw_per_game=false"])
+                       threads=1, overrides=TINY + ["soccer.selfplay.snapshot_every=1",
+                                                    "soccer.selfplay.scripted_fraction=0.0",
+                                                    "soccer.selfplay.draw_per_game=false"])
     records = RunDir(run_dir).metrics()
     assert [r["opponent"] for r in records][0] == -1  # the pool starts empty: the script plays
     assert all(r["opponent"] >= 0 for r in records[1:]) and [r["opponent_pool"] for r in records] == [1, 2, 3]
@@ -46,7 +48,8 @@ def test_self_play_snapshots_become_opponents_without_recompiling(tmp_path, monk
 
     per_game = tmp_path / "per-game"  # the default: a drawn opponent plays until a game ends
     training.start_run("soccer-1v1", str(per_game), num_envs=2, timesteps=80, progress=False, physics="native",
-                       threads=1, overrides=TINY + ["selfplay.snapshot_every=1", "selfplay.scripted_fraction=0.0"])
+                       threads=1, overrides=TINY + ["soccer.selfplay.snapshot_every=1",
+                                                    "soccer.selfplay.scripted_fraction=0.0"])
     records = RunDir(per_game).metrics()
     draws = [i for i in range(1, len(records)) if records[i - 1]["episodes"]]  # iterations after a game ended
     assert draws and all(records[i]["opponent"] >= 0 for i in draws)
@@ -56,7 +59,7 @@ def test_self_play_snapshots_become_opponents_without_recompiling(tmp_path, monk
 
 
 def test_a_run_without_self_play_plays_the_configured_script(tmp_path, monkeypatch):
-    import policies.selfplay as selfplay
+    import policies.soccer.selfplay as selfplay
 
     env = _env("soccer-1v1")
     monkeypatch.setattr(training, "build_env", lambda config: env)
@@ -65,7 +68,7 @@ def test_a_run_without_self_play_plays_the_configured_script(tmp_path, monkeypat
     monkeypatch.setattr(selfplay, "script_opponents", lambda *args: made.append(real(*args)) or made[-1])
     run_dir = tmp_path / "scripted"
     training.start_run("soccer-1v1", str(run_dir), num_envs=2, timesteps=20, progress=False, physics="native",
-                       threads=1, overrides=TINY + ["selfplay.opponent=scripted"])
+                       threads=1, overrides=TINY + ["soccer.selfplay.opponent=scripted"])
     assert [r["opponent"] for r in RunDir(run_dir).metrics()] == [-1, -1]
     assert len(made) == 1 and len(made[0]) == 1 and float(made[0][0].placo) == 1.0  # the placo player, not standing
     standing = selfplay.script_opponents(SelfPlayConfig(script="standing"), 8, 3, 2)
@@ -109,12 +112,13 @@ def test_camera_tasks_get_a_cnn_actor_that_saves_loads_and_acts(tmp_path):
 def test_soccer_configs_fail_before_any_work():
     with pytest.raises(ConfigError, match="trains with --backend rsl"):
         TrainConfig(task="soccer-1v1-vision", backend="brax").resolved()
-    with pytest.raises(ConfigError, match="selfplay.opponent=scripted"):
-        apply_overrides(TrainConfig(task="soccer-1v1", backend="brax").resolved(), ["selfplay.opponent=self-play"])
+    with pytest.raises(ConfigError, match="soccer.selfplay.opponent=scripted"):
+        apply_overrides(TrainConfig(task="soccer-1v1", backend="brax").resolved(),
+                        ["soccer.selfplay.opponent=self-play"])
     assert TrainConfig(task="soccer-1v1", backend="brax").resolved().self_play is False
     assert TrainConfig(task="soccer-2v2").resolved().self_play is True
-    with pytest.raises(ConfigError, match="selfplay"):
-        apply_overrides(TrainConfig(task="soccer-1v1").resolved(), ["selfplay.pool_size=0"])
+    with pytest.raises(ConfigError, match="soccer.selfplay"):
+        apply_overrides(TrainConfig(task="soccer-1v1").resolved(), ["soccer.selfplay.pool_size=0"])
 
 
 def test_soccer_evaluation_figures():
@@ -137,7 +141,7 @@ def test_a_self_play_snapshot_is_frozen_while_the_learner_trains_on():
     from rsl_rl.models import MLPModel
 
     from legged.soccer.opponents import OpponentNet, network_actions
-    from policies.selfplay import snapshot_rsl_actor
+    from policies.soccer.selfplay import snapshot_rsl_actor
 
     obs = dummy_observations({"state": 6}, 4)
     actor = MLPModel(obs, {"actor": ["state"]}, "actor", 3, hidden_dims=(8,), obs_normalization=True)

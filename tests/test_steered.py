@@ -1,4 +1,4 @@
-"""A state pilot trained in its vision student's camera game (policies.steered)."""
+"""A state pilot trained in its vision student's camera game (policies.soccer.steered)."""
 
 import dataclasses
 from pathlib import Path
@@ -14,23 +14,28 @@ from policies.config import ConfigError, TrainConfig
 from policies.policy_io import load_policy
 from policies.rsl_vecenv import RslVecEnv
 from policies.run_dir import RunDir
+from policies.soccer.config import SoccerTrainConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDENT = "assets/policies/op3-soccer-1v1-vision-piloted"
-"""A shipped vision student that estimates the game, with the state pilot that steers it (its config's pilot)."""
+"""A shipped vision student that estimates the game, with the state pilot that steers it (its config's
+soccer.pilot)."""
 
 
-def _pilot_config(**changes) -> TrainConfig:
-    """The shipped pilot's config, to train it again in its student's game."""
-    pilot = RunDir(ROOT / STUDENT).load_config().pilot
-    return dataclasses.replace(RunDir(ROOT / pilot).load_config(), **{"steered_student": str(ROOT / STUDENT), **changes})
+def _pilot_config(soccer: dict | None = None, **changes) -> TrainConfig:
+    """The shipped pilot's config, to train it again in its student's game (`soccer`: changes to its soccer
+    section, `changes`: to the rest)."""
+    pilot = RunDir(ROOT / STUDENT).load_config().soccer.pilot
+    config = RunDir(ROOT / pilot).load_config()
+    section = dataclasses.replace(config.soccer, **{"steered_student": str(ROOT / STUDENT), **(soccer or {})})
+    return dataclasses.replace(config, soccer=section, **changes)
 
 
 def test_a_pilot_in_its_students_game_sees_and_plays_as_it_steers_the_student():
     """Each step of the steered game: the learner reads [proprioception, the student's estimate as its game uses it]
     and its corrections move the robots exactly as when it steers the student (`--pilot`, LearnerView.steer_with)
     from the same start."""
-    from policies.steered import steered_env
+    from policies.soccer.steered import steered_env
     from policies.training import build_env
 
     student_config = RunDir(ROOT / STUDENT).load_config()
@@ -39,7 +44,7 @@ def test_a_pilot_in_its_students_game_sees_and_plays_as_it_steers_the_student():
     assert steered.observation_dims() == {"state": PROPRIO_SIZE + 14,
                                           "privileged_state": steered.view.observation_dims()["privileged_state"]}
     venv = steered.vec_env(RslVecEnv(VectorEnv.of(steered.view, 2, "native", 1), seed=3))
-    pilot = load_policy(ROOT / student_config.pilot)[0]
+    pilot = load_policy(ROOT / student_config.soccer.pilot)[0]
     piloted = build_env(student_config, progress=False)  # the student steered by the same pilot, as eval plays it
     vector = VectorEnv.of(piloted, 2, "native", 1)
     batch = vector.reset(jax.random.PRNGKey(3))
@@ -61,22 +66,23 @@ def test_a_pilot_in_its_students_game_sees_and_plays_as_it_steers_the_student():
 def test_steered_student_names_a_vision_student_of_the_same_game_and_skills():
     """A steered pilot is a state soccer player on the placo prior, and its student a vision student that
     estimates that game with the same walker: anything else is refused by name before anything compiles."""
-    from policies.steered import steered_env
+    from policies.soccer.steered import steered_env
 
-    with pytest.raises(ConfigError, match="steered_student .* needs a state soccer task with command_prior=placo"):
-        TrainConfig(task="soccer-1v1", steered_student=STUDENT).resolved()
+    with pytest.raises(ConfigError,
+                       match="soccer.steered_student .* needs a state soccer task with soccer.command_prior=placo"):
+        TrainConfig(task="soccer-1v1", soccer=SoccerTrainConfig(steered_student=STUDENT)).resolved()
     with pytest.raises(ConfigError, match="a vision student that estimates the game"):
-        steered_env(_pilot_config(steered_student=str(ROOT / "assets/policies/op3-soccer-1v1")))
+        steered_env(_pilot_config({"steered_student": str(ROOT / "assets/policies/op3-soccer-1v1")}))
     with pytest.raises(ConfigError, match="this run must command the same"):
-        steered_env(_pilot_config(getup=""))
+        steered_env(_pilot_config({"getup": ""}))
 
 
 def test_a_steered_pilot_trains_in_its_students_game(tmp_path):
-    """`legged train --set steered_student=...` from the shipped pilot (init_from): train_rsl plays the student's
+    """`legged train --set soccer.steered_student=...` from the shipped pilot (init_from): train_rsl plays the student's
     game, wraps it in the steered VecEnv, warm-starts the learner by its state layout and writes a checkpoint."""
     from policies.training import _train
 
-    pilot = str(ROOT / RunDir(ROOT / STUDENT).load_config().pilot)
+    pilot = str(ROOT / RunDir(ROOT / STUDENT).load_config().soccer.pilot)
     config = _pilot_config(num_envs=4, timesteps=4 * 24, threads=1, checkpoint_every=1, init_from=pilot,
                            random_episode_start=False)
     run = RunDir(tmp_path / "steered").create(config)

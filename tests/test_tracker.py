@@ -229,7 +229,7 @@ def test_a_drill_refuses_a_player_that_reads_its_tracker(tmp_path):
     import yaml
 
     from policies.config import TrainConfig, to_dict
-    from policies.drill import run_drill
+    from policies.soccer.drill import run_drill
 
     config = TrainConfig(task="soccer-1v1-vision").resolved()
     env = dataclasses.replace(config.env, vision_tracker=True, vision_tracker_inputs=True)

@@ -102,6 +102,15 @@ def test_run_directory_is_complete_and_resume_continues(trained_run):
     assert not list(run.checkpoint_dir.glob(".*tmp"))  # no half-written checkpoint left behind
 
 
+def test_every_record_splits_its_iteration_time(trained_run):
+    records = RunDir(trained_run[0]).metrics()
+    for r in records:
+        parts = [r[f"time_{p}_s"] for p in ("physics", "env", "policy", "update")]
+        assert all(p >= 0 for p in parts) and r["time_physics_s"] > 0 and r["time_saving_s"] >= 0
+        assert sum(parts) <= BATCH * 5 / r["steps_per_s"] + 1e-6  # parts of the iteration (TINY: 5 steps each)
+    assert records[0]["time_saving_s"] == 0.0 and records[1]["time_saving_s"] > 0  # the first record's write
+
+
 def test_eval_is_deterministic_and_onnx_matches(trained_run, tiny_env, tmp_path):
     run_dir, _, _ = trained_run
     policy, config = load_policy(run_dir)

@@ -16,6 +16,7 @@ from policies.algorithms import build_algorithm
 from policies.config import TrainConfig, apply_overrides
 from policies.rsl_backend import dummy_observations, load_checkpoint, save_checkpoint
 from policies.run_dir import RunDir
+from policies.soccer.config import SoccerTrainConfig
 from policies.teacher_kl import TeacherKL
 
 TINY = ["ppo.actor_hidden=[16]", "ppo.critic_hidden=[16]", "ppo.num_steps_per_env=4", "ppo.num_mini_batches=2",
@@ -148,7 +149,8 @@ DRILL_S = 1.0
 def _placo_teacher_config() -> TrainConfig:
     """A tiny state soccer player whose commands correct the placo player's."""
     return apply_overrides(TrainConfig(task="soccer-1v1", physics="native", threads=1, num_envs=2, timesteps=8,
-                                       checkpoint_every=1, walker=WALKER, command_prior="placo").resolved(), TINY)
+                                       checkpoint_every=1,
+                                       soccer=SoccerTrainConfig(walker=WALKER, command_prior="placo")).resolved(), TINY)
 
 
 def _state_sizes() -> dict:
@@ -193,10 +195,10 @@ def test_a_teacher_that_corrected_the_placo_command_teaches_the_whole_command(pl
     assert record["step"] == 16 and np.isfinite(record["loss_behavior"])
     assert "loss_behavior_ball" not in record  # a whole-command student has no label groups
     student, scfg = load_policy(tmp_path / "student")
-    assert scfg.command_prior == "" and scfg.distill.teacher_prior and scfg.game_gives_placo_command
-    assert scfg.walker == WALKER
+    assert scfg.soccer.command_prior == "" and scfg.distill.teacher_prior and scfg.game_gives_placo_command
+    assert scfg.soccer.walker == WALKER
     assert student.inputs == ("state", "camera") and student.num_actions == 3
-    from policies.drill import run_drill  # the student does the empty-goal drill through its own camera
+    from policies.soccer.drill import run_drill  # the student does the empty-goal drill through its own camera
 
     report = run_drill("empty-goal", str(tmp_path / "student"), episodes=1, seed=0, threads=1, progress=False,
                        num_envs=1, seconds=DRILL_S)
@@ -213,7 +215,7 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
     from legged.tasks import make
     from policies.algorithms import teacher_model
     from policies.distill import start_distill
-    from policies.drill import run_drill
+    from policies.soccer.drill import run_drill
     from policies.policy_io import load_policy, load_walker
 
     walker = load_walker(WALKER, prior="placo")
@@ -253,12 +255,12 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
         torch.testing.assert_close(with_margin(obs)[:, :3], clipped)
         assert (clipped + obs["command_prior"]).abs().max() <= 1.0 + margin
 
-    assert main(["train", "soccer-1v1-vision", "--run-dir", str(tmp_path / "ppo"), "--set", f"walker={WALKER}",
-                 "--set", "command_prior=placo"]) == 2
+    assert main(["train", "soccer-1v1-vision", "--run-dir", str(tmp_path / "ppo"), "--set",
+                 f"soccer.walker={WALKER}", "--set", "soccer.command_prior=placo"]) == 2
     err = capsys.readouterr().err
     assert "only a distilled student" in err and err.count("\n") == 1, err
     record = start_distill(str(placo_teacher), "dagger", str(tmp_path / "student"), timesteps=16, progress=False,
-                           task="soccer-1v1-vision", overrides=["command_prior=placo"])
+                           task="soccer-1v1-vision", overrides=["soccer.command_prior=placo"])
     assert record["step"] == 16 and np.isfinite(record["loss_behavior"]) and "loss_behavior_ball" in record
     student, scfg = load_policy(tmp_path / "student")
     assert scfg.estimates_world and scfg.distill.teacher_prior and student.num_actions == 17  # raw labels
@@ -284,7 +286,7 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
 
     # KL-regularised RL from that student: its critic learns first, its actor held still, then both
     record = start_distill(str(placo_teacher), "kl", str(tmp_path / "kl"), timesteps=16, progress=False,
-                           task="soccer-1v1-vision", overrides=["command_prior=placo", "checkpoint_every=1",
+                           task="soccer-1v1-vision", overrides=["soccer.command_prior=placo", "checkpoint_every=1",
                                                                 f"distill.student_init={tmp_path / 'student'}",
                                                                 "distill.student_init_whole=true",
                                                                 "distill.critic_warmup=1"])
@@ -301,22 +303,23 @@ def test_a_student_that_estimates_the_game_adds_the_placo_command_from_its_estim
 def test_a_curriculum_distils_on_the_empty_goal_drill_then_takes_that_student_whole(placo_teacher, tmp_path, capsys):
     from legged.soccer.drills import DrillConfig, DrillEnv
     from policies.distill import start_distill
-    from policies.drill import drill_env
+    from policies.soccer.drill import drill_env
     from policies.training import build_env
 
-    student = ["command_prior=placo", "env.vision_gaze=true", "env.scene.head_camera_fovy_deg=70"]
+    student = ["soccer.command_prior=placo", "env.vision_gaze=true", "env.scene.head_camera_fovy_deg=70"]
     sets = lambda extra: sum((["--set", o] for o in student + extra), [])
     distill = ["distill", str(placo_teacher), "--method", "dagger", "--task", "soccer-1v1-vision", "--run-dir"]
-    for extra, message in ((["drill=walk"], "drill must be ''"),
+    for extra, message in ((["soccer.drill=walk"], "soccer.drill must be ''"),
                            (["distill.student_init_whole=true"], "name that run")):
         assert main(distill + [str(tmp_path / "bad"), *sets(extra)]) == 2
         err = capsys.readouterr().err
         assert message in err and err.count("\n") == 1, err
     drill = tmp_path / "drill"
     record = start_distill(str(placo_teacher), "dagger", str(drill), timesteps=16, progress=False,
-                           task="soccer-1v1-vision", overrides=student + ["drill=empty-goal"])
+                           task="soccer-1v1-vision", overrides=student + ["soccer.drill=empty-goal"])
     assert record["step"] == 16 and np.isfinite(record["loss_behavior"])
-    assert not TrainConfig(task="soccer-1v1", drill="empty-goal").resolved().self_play  # nobody else plays a drill
+    assert not TrainConfig(task="soccer-1v1",  # nobody else plays a drill
+                           soccer=SoccerTrainConfig(drill="empty-goal")).resolved().self_play
     env = build_env(RunDir(drill).load_config())
     assert isinstance(env, DrillEnv) and env.drill.name == "empty-goal" and env.config.end_on_goal
     seen = drill_env(str(drill), DrillConfig(name="empty-goal"), randomize=False)  # `legged drill` sees as it learned
@@ -357,7 +360,7 @@ def test_the_game_gives_the_placo_command_to_a_corrector_or_to_clip_an_estimatin
     corrected = dataclasses.replace(vision.distill, teacher_prior=True)
     assert not vision.game_gives_placo_command  # a teacher that did not correct the placo command
     assert dataclasses.replace(vision, distill=corrected).game_gives_placo_command  # the observation command_prior
-    estimating = dataclasses.replace(vision, command_prior="placo", distill=corrected)
+    estimating = dataclasses.replace(vision, soccer=SoccerTrainConfig(command_prior="placo"), distill=corrected)
     assert estimating.estimates_world and not estimating.game_gives_placo_command  # raw labels: not needed
     clipped = dataclasses.replace(estimating, distill=dataclasses.replace(corrected, correction_margin=0.5))
     assert clipped.game_gives_placo_command  # to clip its correction labels
@@ -482,11 +485,12 @@ def test_label_weights_weigh_named_groups_and_the_drill_ignores_the_absent_oppon
     from policies.config import DistillConfig
 
     student = apply_overrides(TrainConfig(task="soccer-1v1-vision", algo="dagger", distill=DistillConfig(teacher="t")),
-                              [f"walker={WALKER}", "command_prior=placo"])
+                              [f"soccer.walker={WALKER}", "soccer.command_prior=placo"])
     labels = weighted_labels(student)
     assert list(labels["label_groups"]) == ["corrections", "ball", "ball_vel", "own_goal", "opponent_goal",
                                             "opponent0"] and labels["label_weights"] == [1.0] * 17
-    drill = weighted_labels(dataclasses.replace(student, drill="empty-goal"))["label_weights"]
+    on_the_drill = dataclasses.replace(student, soccer=dataclasses.replace(student.soccer, drill="empty-goal"))
+    drill = weighted_labels(on_the_drill)["label_weights"]
     assert drill[:13] == [1.0] * 13 and drill[13:] == [0.0] * 4  # the opponent goal still counts
     weighted = apply_overrides(student, ["distill.label_weights={ball: 4, corrections: 0.5}"])
     assert weighted_labels(weighted)["label_weights"][:7] == [0.5] * 3 + [4.0] * 3 + [1.0]

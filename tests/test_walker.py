@@ -105,6 +105,7 @@ def test_with_the_placo_prior_actions_correct_the_placo_players_command():
     walk the placo player's command for their own game features; an action adds to it, in action units."""
     from legged.soccer.placo.player import load_tables, request_from_features
     from policies.config import ConfigError, TrainConfig
+    from policies.soccer.config import SoccerTrainConfig
 
     size = PROPRIO_SIZE + 8
     w = np.zeros((size, 20), np.float32)
@@ -149,7 +150,7 @@ def test_with_the_placo_prior_actions_correct_the_placo_players_command():
                                np.clip(np.asarray(jax.vmap(lambda f: request_from_features(tables, f)[0])(
                                    obs["features"])), WALK.command_low, WALK.command_high), atol=1e-5)
     with pytest.raises(ConfigError, match="command_prior must be"):
-        TrainConfig(task="soccer-1v1", command_prior="placo").resolved()
+        TrainConfig(task="soccer-1v1", soccer=SoccerTrainConfig(command_prior="placo")).resolved()
 
 
 @pytest.fixture(scope="module")
@@ -202,15 +203,16 @@ def test_a_walker_must_step_at_the_games_control_rate():
 
 def test_a_walker_must_be_an_op3_walk_run(tmp_path):
     from policies.config import ConfigError, TrainConfig
+    from policies.soccer.config import SoccerTrainConfig
     from policies.policy_io import load_walker
     from policies.run_dir import RunDir
 
-    with pytest.raises(ConfigError, match="walker .* is for soccer tasks"):
-        TrainConfig(task="go1-flat", walker="somewhere").resolved()
-    with pytest.raises(ConfigError, match="selfplay.script"):
+    with pytest.raises(ConfigError, match="soccer.walker .* is for soccer tasks"):
+        TrainConfig(task="go1-flat", soccer=SoccerTrainConfig(walker="somewhere")).resolved()
+    with pytest.raises(ConfigError, match="soccer.selfplay.script"):
         from policies.config import apply_overrides
 
-        apply_overrides(TrainConfig(task="soccer-1v1").resolved(), ["selfplay.script=goalie"]).resolved()
+        apply_overrides(TrainConfig(task="soccer-1v1").resolved(), ["soccer.selfplay.script=goalie"]).resolved()
     other = RunDir(tmp_path / "flat")
     other.create(TrainConfig(task="go1-flat").resolved())
     with pytest.raises(ValueError, match="a walker is an op3-walk run"):
@@ -285,15 +287,18 @@ def test_a_fallen_robot_gets_up_through_the_getup_skill_then_walks_again():
 
 def test_getup_needs_a_walker_and_games_that_go_on_after_a_fall():
     from policies.config import ConfigError, TrainConfig, apply_overrides
+    from policies.soccer.config import SoccerTrainConfig
 
-    with pytest.raises(ConfigError, match="getup .* needs walker"):
-        TrainConfig(task="soccer-1v1", getup="up").resolved()
+    with pytest.raises(ConfigError, match="soccer.getup .* needs soccer.walker"):
+        TrainConfig(task="soccer-1v1", soccer=SoccerTrainConfig(getup="up")).resolved()
     with pytest.raises(ConfigError, match="end_on_fall=never"):
-        TrainConfig(task="soccer-1v1", getup="up", walker="walk").resolved()
+        TrainConfig(task="soccer-1v1", soccer=SoccerTrainConfig(getup="up", walker="walk")).resolved()
     with pytest.raises(ConfigError, match="limb_floor_contacts=true"):
-        apply_overrides(TrainConfig(task="soccer-1v1").resolved(), ["getup=up", "walker=walk", "env.end_on_fall=never"])
+        apply_overrides(TrainConfig(task="soccer-1v1").resolved(),
+                        ["soccer.getup=up", "soccer.walker=walk", "env.end_on_fall=never"])
     assert apply_overrides(TrainConfig(task="soccer-1v1").resolved(), [
-        "getup=up", "walker=walk", "env.end_on_fall=never", "env.scene.limb_floor_contacts=true"]).getup == "up"
+        "soccer.getup=up", "soccer.walker=walk", "env.end_on_fall=never",
+        "env.scene.limb_floor_contacts=true"]).soccer.getup == "up"
 
 
 def test_what_a_vision_player_that_estimates_the_game_steers_by(estimating):
@@ -344,13 +349,14 @@ def test_what_a_vision_player_that_estimates_the_game_steers_by(estimating):
 
 
 def test_a_shipped_piloted_vision_player_brings_its_pilot_to_games_and_drills():
-    """A vision student whose config names a pilot (TrainConfig.pilot; assets/policies/op3-soccer-1v1-vision-piloted)
-    is steered by it wherever it plays: in games (build_env: eval, view, DAgger) and in drills (drill_env); kl
-    refuses it. A run that is not a state soccer player commanding the same walker is refused by name."""
+    """A vision student whose config names a pilot (TrainConfig.soccer.pilot;
+    assets/policies/op3-soccer-1v1-vision-piloted) is steered by it wherever it plays: in games (build_env: eval,
+    view, DAgger) and in drills (drill_env); kl refuses it. A run that is not a state soccer player commanding the
+    same walker is refused by name."""
     from pathlib import Path
 
     from legged.soccer.drills import DrillConfig
-    from policies.drill import drill_env
+    from policies.soccer.drill import drill_env
     from policies.evaluate import state_player_game, steer_with_pilot
     from policies.run_dir import RunDir
     from policies.config import ConfigError
@@ -358,13 +364,14 @@ def test_a_shipped_piloted_vision_player_brings_its_pilot_to_games_and_drills():
 
     piloted = Path(__file__).resolve().parents[1] / "assets/policies/op3-soccer-1v1-vision-piloted"
     config = RunDir(piloted).load_config()
-    assert config.pilot == "assets/policies/op3-soccer-1v1-pilot-steered"
+    assert config.soccer.pilot == "assets/policies/op3-soccer-1v1-pilot-steered"
     game = build_env(config, progress=False)
-    assert game.state_pilot is not None and game.pilot_name == config.pilot
+    assert game.state_pilot is not None and game.pilot_name == config.soccer.pilot
     assert game.state_pilot.mean.shape[-1] == PROPRIO_SIZE + game.world_size
     drill = drill_env(str(piloted), DrillConfig(name="empty-goal"), randomize=False)
-    assert drill.state_pilot is not None and drill.pilot_name == config.pilot
-    trained_on_the_drill = build_env(dataclasses.replace(config, drill="empty-goal"), progress=False)  # its eval
+    assert drill.state_pilot is not None and drill.pilot_name == config.soccer.pilot
+    on_the_drill = dataclasses.replace(config, soccer=dataclasses.replace(config.soccer, drill="empty-goal"))
+    trained_on_the_drill = build_env(on_the_drill, progress=False)  # its eval
     assert trained_on_the_drill.state_pilot is not None
     with pytest.raises(ValueError, match="pilot assets/policies/op3-walker: a soccer opponent is"):
         steer_with_pilot(game, "assets/policies/op3-walker")
@@ -373,7 +380,7 @@ def test_a_shipped_piloted_vision_player_brings_its_pilot_to_games_and_drills():
         refuse_pilot(dataclasses.replace(config, algo="kl"))  # kl's PPO would learn corrections the pilot ignores
     # `legged eval --compare-pilot` (and --compare-teacher) count on the state player's game starting as the
     # student's for the same reset key: the pilot, trained on estimate errors, plays them at the truth
-    truth = state_player_game(RunDir(config.pilot).load_config())
+    truth = state_player_game(RunDir(config.soccer.pilot).load_config())
     assert not truth.config.estimate_noise.enabled
     key = jax.random.fold_in(jax.random.PRNGKey(34567), 0)
     starts = [np.asarray(VectorEnv.of(env, 2, "native", 1).reset(key).state.obs["privileged_state"])

@@ -186,8 +186,8 @@ def resolve(request: ViewRequest, log: Callable[[str], None] = print) -> Resolve
 
         if task_entry(task).kind != "soccer":
             raise ValueError(f"--opponent applies to soccer tasks; {task} has no opponents")
-        if config is not None and config.drill:
-            raise ValueError(f"run {run_dir} trained on the {config.drill} drill, where nobody else plays: "
+        if config is not None and config.soccer.drill:
+            raise ValueError(f"run {run_dir} trained on the {config.soccer.drill} drill, where nobody else plays: "
                              f"drop --opponent")
     if request.robot not in ("", "project"):
         from policies.config import TrainConfig
@@ -229,7 +229,7 @@ def _resolve_drill(request: ViewRequest, log: Callable[[str], None]) -> Resolved
     from legged.robots import OP3
     from legged.robots.models import checked_model
     from legged.robots.op3 import OP3_CTRL_DT
-    from policies.drill import check_player, drill_env
+    from policies.soccer.drill import check_player, drill_env
     from policies.run_dir import RunDir
 
     if request.drill not in DRILLS:

@@ -15,6 +15,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from legged.files import write_atomic
+
 FORMAT = "legged-trajectory-1"
 """Format tag stored in every file."""
 
@@ -143,9 +145,7 @@ class Trajectory:
         path = Path(path)
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_name(f".{path.name}.tmp")
-            tmp.write_bytes(self.to_bytes())
-            tmp.replace(path)  # a killed save never leaves a half-written trajectory under the real name
+            write_atomic(path, self.to_bytes())  # a killed save never leaves a half-written file under the real name
         except OSError as exc:
             raise OSError(f"cannot write trajectory {path}: {exc.strerror}") from None
         return path

@@ -1,4 +1,4 @@
-"""The command line's benchmarks: `legged bench env|soak|soccer|encoder` (and `bench plan` and `bench navigate`,
+"""The command line's benchmarks: `legged bench env|train|soak|soccer|encoder` (and `bench plan` and `bench navigate`,
 from legged.cli.nav)."""
 
 from __future__ import annotations
@@ -59,6 +59,22 @@ def cmd_bench_encoder(args) -> int:
                   f"encoder/head {r['encoder_over_head']:.1f}x"))
 
 
+def cmd_bench_train(args) -> int:
+    """`legged bench train`: PPO iterations of each task timed part by part, beside bare physics."""
+    from legged.tasks import default_config
+    from policies.bench_train import bench_train_median, print_train_table
+
+    for task in args.task:
+        default_config(task)  # unknown task -> clear error before any compilation
+    progress = None if args.quiet else (lambda msg: print(f"[bench] {msg}", file=sys.stderr, flush=True))
+    records = [bench_train_median(task, args.repeats, iterations=args.iterations, num_envs=args.num_envs,
+                                  threads=args.threads, physics=args.physics, overrides=tuple(args.set),
+                                  seed=args.seed, warmup=args.warmup, rollout_seconds=args.rollout_seconds,
+                                  progress=progress)
+               for task in args.task]
+    return _print_records(records, args.json, print_train_table)
+
+
 def cmd_bench_soccer(args) -> int:
     """`legged bench soccer`: soccer env steps per second beside the peers."""
     from legged.soccer.bench import bench_soccer, print_soccer_table
@@ -97,6 +113,26 @@ def add_bench_commands(sub) -> None:
     be.add_argument("--json", action="store_true", help="print a JSON list, one object per batch size")
     be.add_argument("--quiet", action="store_true", help="no progress messages")
     be.set_defaults(fn=cmd_bench)
+    bt = bsub.add_parser("train", help="a task's PPO iterations timed part by part (physics, transition, inference, "
+                                       "update, saving) beside bare physics in the same run")
+    bt.add_argument("task", type=task_names, help="comma-separated tasks, measured one after the other")
+    bt.add_argument("--iterations", type=bounded(int, 2, 100000), default=12,
+                    help="PPO iterations per run, the warm-up ones included")
+    bt.add_argument("--warmup", type=bounded(int, 1, 1000), default=2,
+                    help="first iterations left out of the figures (they compile the environment)")
+    bt.add_argument("--num-envs", type=bounded(int, 1, 65536), default=1024)
+    bt.add_argument("--threads", type=bounded(int, 1, 1024), default=2, help="threads of physics and torch")
+    bt.add_argument("--physics", choices=["native", "mjx"], default="native")
+    bt.add_argument("--repeats", type=bounded(int, 1, 100), default=1,
+                    help="runs per task; the record is the median run's, every run's speeds beside it")
+    bt.add_argument("--rollout-seconds", type=bounded(float, 1.0, 3600.0), default=30.0,
+                    help="timed seconds of bare physics (native)")
+    bt.add_argument("--set", action="append", default=[], metavar="PATH=VALUE",
+                    help="config override of the timed runs, as `legged train --set`")
+    bt.add_argument("--seed", type=SEED, default=0)
+    bt.add_argument("--json", action="store_true", help="print a JSON list, one object per task")
+    bt.add_argument("--quiet", action="store_true", help="no progress messages")
+    bt.set_defaults(fn=cmd_bench_train)
     sk = bsub.add_parser("soak", help="random and extreme actions under randomisation: non-finite values and "
                                       "divergences that reach the learner")
     sk.add_argument("--tasks", type=task_names, default=["confined-waypoints", "soccer-1v1"],

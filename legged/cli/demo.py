@@ -1,5 +1,6 @@
-"""`legged demo`: a generated tunnel, an OMPL body-pose plan through it, and the shipped waypoint follower
-walking Go1 through it to the goal (native MuJoCo by default; MJX too on request)."""
+"""`legged demo`: a generated world (a tunnel by default, or a level world: `--level 3 --seed 48` is a corridor
+with a step, a side block, a low bar and a 66-degree turn under a roof), an OMPL body-pose plan through it, and the
+shipped waypoint follower walking Go1 through it to the goal (native MuJoCo by default; MJX too on request)."""
 
 from __future__ import annotations
 
@@ -7,23 +8,24 @@ import json
 import time
 
 from legged.cli.args import SEED, add_server_options, bounded, choices
-from legged.cli.nav import shipped_policy
+from legged.cli.nav import generated_world, shipped_policy
 
 
 def cmd_demo(args) -> int:
     """`legged demo`: world, plan and navigation, printed as they happen; 0 if Go1 reached the goal."""
     view = {"host": args.host, "port": args.port} if args.view else None
     return run_demo(args.out, args.seed, args.difficulty, shipped_policy(args.policy), view=view,
-                    physics=args.physics)
+                    physics=args.physics, level=args.level)
 
 
 def run_demo(out: str, seed: int, difficulty: int, policy_dir: str, view: dict | None = None,
-             physics=("native",)) -> int:
-    """Write a world, plan through it and navigate it with the follower of `policy_dir` on each of
-    `physics`; 0 if Go1 reached the goal on every engine. With `view` ({'host', 'port'}) the dashboard is
-    served afterwards on the demo's world, rolling out the follower."""
+             physics=("native",), level: int | None = None) -> int:
+    """Write a world (a tunnel of `difficulty`, or with `level` that level of legged.worlds.levels), plan through it
+    and navigate it with the follower of `policy_dir` on each of `physics`; 0 if Go1 reached the goal on every
+    engine. With `view` ({'host', 'port'}) the dashboard is served afterwards on the demo's world, rolling out the
+    follower."""
     from legged.robots import GO1
-    from legged.worlds import generate_world, write_world
+    from legged.worlds import write_world
     from planners import HeightMaps, PlannerConfig, plan_path
     from policies.navigate import load_follower, navigate
 
@@ -32,9 +34,10 @@ def run_demo(out: str, seed: int, difficulty: int, policy_dir: str, view: dict |
 
         check_port(view["host"], view["port"])  # fail before the demo's minute of work
     load_follower(policy_dir)  # a missing or foreign policy fails before any work
-    world = generate_world(seed, difficulty)
+    world = generated_world(seed, level, difficulty)
     files = write_world(world, GO1, out)
-    print(f"[demo] world seed={seed} difficulty={difficulty}: {world.summary()['size_m']} m, "
+    kind = f"tunnel difficulty={difficulty}" if level is None else f"level={level}"
+    print(f"[demo] world seed={seed} {kind}: {world.summary()['size_m']} m, "
           f"min clearance {world.min_clearance:.2f} m -> {files['xml']}")
     plan = plan_path(HeightMaps.from_world(world), world.start, world.goal, GO1, PlannerConfig())
     print(f"[demo] {plan.planner} planned {len(plan.waypoints)} body-pose waypoints, {plan.length_m:.2f} m, "
@@ -85,11 +88,15 @@ def _serve(world, plan, policy_dir: str, seed: int, view: dict, physics: str) ->
 
 def add_demo_command(sub) -> None:
     """Register `demo`."""
-    d = sub.add_parser("demo", help="generate a tunnel, plan through it, and watch the shipped follower walk Go1 "
+    d = sub.add_parser("demo", help="generate a world, plan through it, and watch the shipped follower walk Go1 "
                                     "to the goal")
     d.add_argument("--out", default="legged-demo", help="where to write the world files")
-    d.add_argument("--seed", type=SEED, default=0)
-    d.add_argument("--difficulty", type=bounded(int, 0, 20), default=1)
+    d.add_argument("--seed", type=SEED, default=0, help="world seed (with --level 3, 48 is a corridor with a step, a "
+                                                        "side block, a low bar and a 66-degree turn under a 0.62 m roof)")
+    d.add_argument("--difficulty", type=bounded(int, 0, 20), default=1, help="difficulty of the tunnel")
+    d.add_argument("--level", type=bounded(int, 0, 4), default=None,
+                   help="a level world instead of a tunnel: 0-4 (tunnels; corridors; bars, blocks, pillars; steps, "
+                        "ramps, turns; voids)")
     d.add_argument("--policy", default=None, help="a waypoint-follower run (default: the shipped follower)")
     d.add_argument("--physics", type=choices("mjx", "native"), default=["native"],
                    help="comma-separated physics engines to navigate in (default native; mjx,native runs both)")

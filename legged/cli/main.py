@@ -235,7 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--pilot", default=None, metavar="teacher|RUN|none",
                     help="a vision player that estimates the game is steered by a state player (its distillation "
                          "teacher, or a soccer run) from its estimate; none: by its own corrections (default: the "
-                         "run's config.pilot)")
+                         "run's soccer.pilot)")
     ev.add_argument("--tracker", action="store_true",
                     help="a vision player that estimates the game steers by its tracker's goals and ball where it "
                          "knows them (env.vision_tracker, legged.soccer.vision.tracker)")

@@ -18,12 +18,18 @@ def _print_records(records: list[dict], as_json: bool, print_table) -> int:
 
 def _generated_world(args):
     """The world of --seed and --level (legged.worlds.levels) or else --difficulty (the tunnels)."""
+    return generated_world(args.seed, args.level, args.difficulty)
+
+
+def generated_world(seed: int, level: int | None, difficulty: int | None):
+    """The generated world of `seed` at `level` (legged.worlds.levels), or with level None the tunnel of
+    `difficulty`."""
     from legged.worlds.generator import WorldConfig
     from legged.worlds.levels import LevelConfig, make_world
 
-    if args.level is not None:
-        return make_world(args.seed, args.level, WorldConfig(), LevelConfig())
-    return make_world(args.seed, args.difficulty, WorldConfig(), None)
+    if level is not None:
+        return make_world(seed, level, WorldConfig(), LevelConfig())
+    return make_world(seed, difficulty, WorldConfig(), None)
 
 
 def cmd_world(args) -> int:

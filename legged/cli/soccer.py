@@ -10,7 +10,7 @@ from legged.cli.args import SEED, add_physics_options, add_robot_option, bounded
 def cmd_drill(args) -> int:
     """`legged drill`: one skill of a soccer player, measured and printed as JSON."""
     from legged.soccer.drills import DRILLS
-    from policies.drill import run_drill
+    from policies.soccer.drill import run_drill
 
     if args.drill not in DRILLS:
         raise ValueError(f"unknown drill {args.drill!r}; drills: {', '.join(DRILLS)}")

@@ -10,6 +10,7 @@ contact sensors of `env.native_model()`). `NativeEnvs` runs the task's own `spaw
 from __future__ import annotations
 
 import os
+import time
 
 import jax
 import jax.numpy as jnp
@@ -64,6 +65,8 @@ class NativePhysics:
         self._sensors = b.bind("sensordata") if len(adr) else None
         self._warnings = np.asarray(b.warning)
         self._last: dict | None = None
+        self.seconds = 0.0
+        """Wall time spent in the C engine so far (steps, and the forward passes of loaded states), for profiles."""
 
     @property
     def num_envs(self) -> int:
@@ -101,6 +104,7 @@ class NativePhysics:
         written. Returns the whole view."""
         ids = np.asarray(ids, np.int32)
         b = self.batch
+        start = time.perf_counter()
         if fresh:
             b.reset(ids, stage=mujoco.mjtStage.mjSTAGE_NONE)
             for name, values in (model_fields or {}).items():
@@ -112,6 +116,7 @@ class NativePhysics:
         self._state["ctrl"][ids] = ctrl
         if fresh:
             b.forward(ids)
+        self.seconds += time.perf_counter() - start
         view = self._read(ids)
         if self._last is None:
             self._last = view
@@ -133,12 +138,14 @@ class NativePhysics:
             runs = [(a, b, ctrl[:, a]) for a, b in zip(edges[:-1], edges[1:])]
         before = self._unstable_counts()
         failed = np.zeros(self.num_envs, bool)
+        start = time.perf_counter()
         for first, stop, controls in runs:
             self._state["ctrl"][:] = controls
             try:
                 self.batch.step(nstep=stop - first)
             except SimulationError as exc:
                 failed[exc.ids] = True
+        self.seconds += time.perf_counter() - start
         view = self._read()
         bad = failed | (self._unstable_counts() > before) | is_diverged(view["qpos"], view["qvel"], self.limit, np)
         if bad.any():

@@ -105,6 +105,11 @@ class VectorEnv:
             cache[key] = cls(env, num_envs, physics, threads)
         return cache[key]
 
+    def physics_seconds(self) -> float | None:
+        """Wall time spent in MuJoCo's C engine so far (native physics); None on MJX, whose physics is compiled
+        into the same step as the task's verbs."""
+        return self.native.physics.seconds if self.physics == "native" else None
+
     def _zero_sums(self, state: State) -> dict:
         sums = {k: jnp.zeros(self.num_envs) for k in state.metrics if k.startswith("reward/")}
         sums.update(**{"return": jnp.zeros(self.num_envs), "length": jnp.zeros(self.num_envs)})

@@ -28,13 +28,13 @@ import dataclasses
 import hashlib
 import importlib.util
 import os
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
+from legged.files import write_atomic
 from legged.robots.spec import RobotSpec
 
 MAX_TIMESTEP = 0.005
@@ -373,7 +373,5 @@ def _cache_file(name: str, xml: str) -> Path:
     root.mkdir(parents=True, exist_ok=True)
     out = root / f"{name}-{hashlib.sha256(xml.encode()).hexdigest()[:16]}.xml"
     if not out.is_file():
-        with tempfile.NamedTemporaryFile("w", dir=root, suffix=".tmp", delete=False) as tmp:
-            tmp.write(xml)
-        os.replace(tmp.name, out)
+        write_atomic(out, xml)
     return out

@@ -64,10 +64,10 @@ class LearnerView(MjxEnv):
         if game.config.vision_gaze and not self.estimates_world:
             raise ValueError("vision_gaze turns the head toward the player's own estimate of the ball: it needs a "
                              "vision player that estimates the game (a walker with the placo prior: "
-                             "command_prior=placo)")
+                             "soccer.command_prior=placo)")
         if game.config.vision_tracker and not self.estimates_world:
             raise ValueError("vision_tracker replaces parts of a vision player's estimate of the game by what it "
-                             "tracks: it needs a player that estimates the game (command_prior=placo)")
+                             "tracks: it needs a player that estimates the game (soccer.command_prior=placo)")
         if game.camera is not None:  # the learner's observations need its own camera only
             game.camera = game.camera.select([LEARNER])
         self.game, self.net, self.walker, self.teacher_prior = game, net, walker, teacher_prior
@@ -80,7 +80,7 @@ class LearnerView(MjxEnv):
         unknown = sorted(set(game.config.estimate_oracle) - set(self._world_parts))
         if game.config.estimate_oracle and (not self.estimates_world or unknown):
             raise ValueError(f"estimate_oracle replaces parts of a game-estimating vision player's estimate "
-                             f"(command_prior=placo) by the truth; parts are {', '.join(self._world_parts)}"
+                             f"(soccer.command_prior=placo) by the truth; parts are {', '.join(self._world_parts)}"
                              + (f" (unknown: {', '.join(unknown)})" if unknown else ""))
         team = int(game.layout.team[LEARNER])
         goals = np.asarray(game._goals[:, :2], np.float32)[[team, 1 - team]]  # own, opponent
@@ -104,7 +104,7 @@ class LearnerView(MjxEnv):
         Set before the first step is compiled."""
         if not self.estimates_world:
             raise ValueError("a state pilot steers from a vision player's estimate of the game: it needs a player "
-                             "that estimates the game (command_prior=placo)")
+                             "that estimates the game (soccer.command_prior=placo)")
         width = PROPRIO_SIZE + self.world_size
         if pilot.mean.shape[-1] != width:
             raise ValueError(f"the pilot reads {pilot.mean.shape[-1]} features, this player's proprioception and "

@@ -53,11 +53,10 @@ def _yaw_quat(yaw: float) -> list[float]:
 
 
 def _quat_z_to(normal: np.ndarray) -> list[float]:
-    """Quaternion turning +z onto a horizontal unit `normal` (a wall plane's normal)."""
-    axis = np.cross([0.0, 0.0, 1.0], normal)
-    angle = np.arccos(np.clip(normal[2], -1.0, 1.0))
-    axis = axis / np.linalg.norm(axis)
-    return [np.cos(angle / 2), *(np.sin(angle / 2) * axis)]
+    """Quaternion turning +z onto a horizontal unit `normal` (a wall plane's normal): `mujoco.mju_quatZ2Vec`."""
+    quat = np.zeros(4)
+    mujoco.mju_quatZ2Vec(quat, np.asarray(normal, dtype=np.float64))
+    return quat.tolist()
 
 
 def agent_prefix(team: int, player: int) -> str:

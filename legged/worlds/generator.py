@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from legged.files import atomic_path
 from legged.worlds.maps import HeightMaps
 
 
@@ -145,11 +146,10 @@ class World(HeightMaps):
         """Write the world as .npz (floor, ceiling, resolution, origin, start, goal, seed, difficulty)."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + ".tmp.npz")
-        np.savez_compressed(
-            tmp, floor=self.floor, ceiling=self.ceiling, resolution=self.resolution, origin=self.origin,
-            start=self.start, goal=self.goal, seed=self.seed, difficulty=self.difficulty)
-        tmp.replace(path)
+        with atomic_path(path, suffix=".npz") as tmp:  # np.savez would append .npz to any other name
+            np.savez_compressed(
+                tmp, floor=self.floor, ceiling=self.ceiling, resolution=self.resolution, origin=self.origin,
+                start=self.start, goal=self.goal, seed=self.seed, difficulty=self.difficulty)
         return path
 
     @classmethod

@@ -27,6 +27,7 @@ from xml.sax.saxutils import quoteattr
 import mujoco
 import numpy as np
 
+from legged.files import write_atomic
 from legged.robots.op3 import OP3
 
 SERVO_VELOCITY = 4.8
@@ -175,7 +176,5 @@ def op3_urdf_path(model: mujoco.MjModel | None = None, directory: Path | None = 
     path = directory / f"op3_{digest}.urdf"
     if not path.exists():
         directory.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(text)
-        os.replace(tmp, path)
+        write_atomic(path, text)
     return path

@@ -105,13 +105,13 @@ def drill_env(player: str, drill: DrillConfig, randomize: bool, robot: str = "pr
         base = GetUpConfig() if run is None else run.env
         return GetUpSkillEnv(with_randomization(dataclasses.replace(base, episode_seconds=drill.getup_seconds)))
     walker = None
-    if run is not None and run.walker:  # a soccer player that commands a walking skill
-        walker = load_walker(run.walker, run.getup, run.command_prior)
+    if run is not None and run.soccer.walker:  # a soccer player that commands a walking skill
+        walker = load_walker(run.soccer.walker, run.soccer.getup, run.soccer.command_prior)
     game = SoccerConfig() if run is None else players_view(run.env)
     env = DrillEnv(drill, with_randomization(game), placo=player == "placo", walker=walker,
                    teacher_prior=run is not None and run.game_gives_placo_command)  # a vision student's observations
-    if run is not None and run.pilot:  # a vision student steered by a state player from its estimate
-        steer_with_pilot(env, run.pilot)
+    if run is not None and run.soccer.pilot:  # a vision student steered by a state player from its estimate
+        steer_with_pilot(env, run.soccer.pilot)
     return env
 
 

@@ -18,7 +18,7 @@ from legged.soccer.opponents import (
     placo_opponent,
     scripted_opponent,
 )
-from policies.config import SelfPlayConfig
+from policies.soccer.config import SelfPlayConfig
 
 
 def snapshot_rsl_actor(actor: torch.nn.Module) -> Opponent:
@@ -38,7 +38,7 @@ def snapshot_rsl_actor(actor: torch.nn.Module) -> Opponent:
 
 
 def script_opponents(config: SelfPlayConfig, obs_size: int, action_size: int, players_per_team: int) -> tuple:
-    """The env-step arguments of a soccer run without a pool (vision tasks, `selfplay.opponent=scripted`): the
+    """The env-step arguments of a soccer run without a pool (vision tasks, `soccer.selfplay.opponent=scripted`): the
     script `config.script` drives every other robot, the learner's teammate in 2v2 too."""
     script = (placo_opponent if config.script == "placo" else scripted_opponent)(obs_size, action_size)
     return (script, script) if players_per_team > 1 else (script,)

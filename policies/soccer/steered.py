@@ -1,6 +1,6 @@
-"""A state soccer player trained to steer a frozen vision student (TrainConfig.steered_student).
+"""A state soccer player trained to steer a frozen vision student (TrainConfig.soccer.steered_student).
 
-A piloted vision player (TrainConfig.pilot, LearnerView.steer_with) is a vision student that estimates the game
+A piloted vision player (TrainConfig.soccer.pilot, LearnerView.steer_with) is a vision student that estimates the game
 from its head camera and a state player (the pilot) that reads proprioception and that estimate as if it were
 the truth. A pilot trained at the truth, or on modelled estimate errors (env.estimate_noise), meets the student's
 actual errors, which are correlated over time and with each other, only when it plays. Here it trains in them:
@@ -33,22 +33,24 @@ from policies.run_dir import RunDir
 
 
 def steered_env(config: TrainConfig) -> "SteeredView":
-    """The training environment of a state soccer run with `steered_student`: the student's camera game as the
+    """The training environment of a state soccer run with `soccer.steered_student`: the student's camera game as the
     learner's view, with the student loaded; ConfigError naming what does not fit, before anything compiles."""
-    path = Path(config.steered_student)
+    path = Path(config.soccer.steered_student)
     student = RunDir(path).load_config()  # RunDirError naming the path if it is not a run
+    theirs, mine = student.soccer, config.soccer
     if not student.estimates_world or student.backend != "rsl":
-        raise ConfigError(f"steered_student {path}: a vision student that estimates the game (a soccer vision task, "
-                          f"command_prior=placo, rsl); this run trained {student.task} with command_prior "
-                          f"{student.command_prior!r} and the {student.backend} backend")
+        raise ConfigError(f"soccer.steered_student {path}: a vision student that estimates the game (a soccer vision "
+                          f"task, soccer.command_prior=placo, rsl); this run trained {student.task} with command_prior "
+                          f"{theirs.command_prior!r} and the {student.backend} backend")
     if student.task != f"{config.task}-vision":
-        raise ConfigError(f"steered_student {path} plays {student.task}; a {config.task} player steers a "
+        raise ConfigError(f"soccer.steered_student {path} plays {student.task}; a {config.task} player steers a "
                           f"{config.task}-vision student")
-    if (student.walker, student.command_prior, student.getup) != (config.walker, config.command_prior, config.getup):
-        raise ConfigError(f"steered_student {path} commands walker={student.walker!r}, command_prior="
-                          f"{student.command_prior!r}, getup={student.getup!r}; this run must command the same")
+    if (theirs.walker, theirs.command_prior, theirs.getup) != (mine.walker, mine.command_prior, mine.getup):
+        raise ConfigError(f"soccer.steered_student {path} commands walker={theirs.walker!r}, command_prior="
+                          f"{theirs.command_prior!r}, getup={theirs.getup!r}; this run must command the same")
     # the student's game as eval plays it, without its pilot; the self-play opponents are this run's networks
-    view = build_env(dataclasses.replace(student, pilot="", drill="", ppo=config.ppo), progress=False)
+    view = build_env(dataclasses.replace(student, soccer=dataclasses.replace(theirs, pilot="", drill=""),
+                                         ppo=config.ppo), progress=False)
     return SteeredView(view, load_policy(path)[0])
 
 
@@ -105,6 +107,9 @@ class SteeredVecEnv(VecEnv):
 
     def curriculum_levels(self):
         return self.inner.curriculum_levels()
+
+    def physics_seconds(self):
+        return self.inner.physics_seconds()
 
     def _see(self) -> None:
         """The student's actions at the current observations (its estimate among them) and the learner's."""

@@ -1,0 +1,48 @@
+"""`legged bench train`'s pieces: the loop's time split from a run's records, and MuJoCo's profile of a step.
+
+(The loop's own time fields are checked on a real run in tests/test_training.py; the benchmark's figures are
+measured, not asserted: assets/benchmarks/.)"""
+
+import mujoco
+import pytest
+
+from legged.bench import PROFILE_TIMERS, physics_profile
+from policies.bench_train import PARTS, loop_split
+
+
+def _record(wall, physics=1.0, env=0.5, policy=0.25, update=0.2, saving=0.05):
+    return {"wall_s": wall, "time_physics_s": physics, "time_env_s": env, "time_policy_s": policy,
+            "time_update_s": update, "time_saving_s": saving}
+
+
+def test_the_split_leaves_out_the_warm_up_iterations_and_sums_to_the_loop():
+    records = [_record(30.0, physics=20.0), _record(35.0)] + [_record(35.0 + 2.0 * k) for k in range(1, 5)]
+    split = loop_split(records, warmup=2, per_iteration=1000)
+    assert split["iterations"] == 4 and split["seconds_per_iteration"] == 2.0
+    assert split["loop_env_steps_per_s"] == 500.0
+    assert split["physics_share"] == 0.5 and split["physics_s_per_iteration"] == 1.0
+    assert sum(split[f"{p}_share"] for p in PARTS) == pytest.approx(1.0)
+
+
+def test_mjx_records_have_no_physics_part():
+    records = [_record(1.0 + k, physics=None) for k in range(4)]
+    split = loop_split(records, warmup=1, per_iteration=10)
+    assert split["physics_share"] is None and split["env_share"] == 0.5
+
+
+def test_a_split_needs_iterations_after_the_warm_up():
+    with pytest.raises(ValueError, match="no iteration after the 3 warm-up"):
+        loop_split([_record(1.0)] * 3, warmup=3, per_iteration=10)
+
+
+def test_the_profile_reads_mujocos_timers_and_constraint_counts():
+    model = mujoco.MjModel.from_xml_string(
+        '<mujoco><worldbody><geom type="plane" size="1 1 0.1"/><body pos="0 0 0.1"><freejoint/>'
+        '<geom type="box" size="0.1 0.1 0.1"/></body></worldbody></mujoco>')
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    profile = physics_profile(model, [data, data], steps=20)
+    assert profile["physics_steps"] == 40 and data.time == 0.0  # the states given are left as they were
+    assert profile["contacts"] == 4.0 and profile["constraint_rows"] > 0 and profile["solver_iterations"] > 0
+    assert all(profile[f"{t}_us"] >= 0 for t in PROFILE_TIMERS) and profile["step_us"] > 0
+    assert profile["step_us"] >= profile["constraint_us"] and profile["solver"] == "mjSOL_NEWTON"
