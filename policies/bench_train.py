@@ -77,7 +77,7 @@ def bench_train(task: str, iterations: int = 10, num_envs: int = 1024, threads: 
         per_iteration = num_envs * probe.ppo.num_steps_per_env
         say(f"{task}: {iterations} PPO iterations of {num_envs} environments ({physics}, {threads} threads)")
         start_run(task, str(run_dir), num_envs=num_envs, timesteps=iterations * per_iteration, seed=seed,
-                  overrides=[f"checkpoint_every={iterations}", *overrides], progress=progress is not None,
+                  overrides=[f"checkpoint_every={iterations}", *overrides], progress=False,
                   physics=physics, threads=threads)
         records = RunDir(run_dir).metrics()
     record = {"task": task, "physics": physics, "num_envs": num_envs, "threads": threads,
