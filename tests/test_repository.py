@@ -25,18 +25,10 @@ LEGACY_LARGE_FILES = (
     "assets/runs/soccer-1v1-vision-tracker-cpu2/checkpoints/step_000001966080.pt",
     # Checkpoints of cited runs that nothing reads, still to be removed.
     "assets/runs/soccer-1v1-vision-heading-cpu2/checkpoints/step_000008011776.pt",
-    "assets/runs/soccer-1v1-vision-heading-sight-cpu2/checkpoints/step_000001966080.pt",
     "assets/runs/soccer-1v1-vision-kl-cpu2/checkpoints/step_000001228800.pt",
-    "assets/runs/soccer-1v1-vision-margin-cpu2/checkpoints/step_000001966080.pt",
     "assets/runs/soccer-1v1-vision-memory-cpu2/checkpoints/step_000002088960.pt",
-    "assets/runs/soccer-1v1-vision-piloted-dagger-cpu2/checkpoints/step_000001966080.pt",
-    "assets/runs/soccer-1v1-vision-placo-cpu2/checkpoints/step_000007249920.pt",
     "assets/runs/soccer-1v1-vision-raw-cpu2/checkpoints/step_000001966080.pt",
-    "assets/runs/soccer-1v1-vision-raw-cpu2/checkpoints/step_000003932160.pt",
-    "assets/runs/soccer-1v1-vision-stagger-cpu2/checkpoints/step_000012902400.pt",
     "assets/runs/soccer-1v1-vision-stagger-cpu2/checkpoints/step_000014008320.pt",
-    "assets/runs/soccer-1v1-vision-tracker2-cpu2/checkpoints/step_000001966080.pt",
-    "assets/runs/soccer-1v1-vision-trackin-cpu2/checkpoints/step_000001966080.pt",
     "assets/runs/soccer-1v1-vision-wide-cpu2/checkpoints/step_000004792320.pt",
 )
 """Files over MAX_BYTES outside assets/policies/ that are still tracked, each by its path. Remove a line when its
