@@ -6,12 +6,14 @@ level body at a heading fits at a cell when the band of heights it may take (abo
 footprint, below the ceiling over it, legs within reach; planners.pose_band) is not empty. The footprint
 is enlarged by one cell, so the filters are conservative for the bilinear height look-ups. Dijkstra's
 algorithm (scipy) then finds the shortest chain of cells and turns, which is shortcut with the exact
-motion check and handed back as states of the projected space.
+motion check and handed back as states of the projected space. The lattice (valid nodes and graph) is
+built once per BodyChecker and reused, so replanning on the same maps only runs the search.
 """
 
 from __future__ import annotations
 
 import math
+import weakref
 
 import numpy as np
 from scipy import ndimage, sparse
@@ -21,6 +23,9 @@ from planners.body_check import BodyChecker, widest_band
 
 YAW_BINS = 16
 """Headings searched (every 22.5 degrees)."""
+
+_LATTICES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""Per BodyChecker: {angle_weight: (valid nodes, graph)}, freed with the checker."""
 
 
 def _footprint(half_x: float, half_y: float, yaw: float, res: float) -> np.ndarray:
@@ -99,6 +104,15 @@ def _graph(valid: np.ndarray, res: float, angle_weight: float) -> sparse.csr_mat
     return sparse.csr_matrix((np.concatenate(costs), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
 
 
+def lattice_of(checker: BodyChecker, angle_weight: float) -> tuple[np.ndarray, sparse.csr_matrix]:
+    """(valid nodes, graph) of the checker's maps, built on first use and kept while the checker lives."""
+    built = _LATTICES.setdefault(checker, {})
+    if angle_weight not in built:
+        valid = next(iter(built.values()))[0] if built else valid_grid(checker)
+        built[angle_weight] = valid, _graph(valid, checker.maps.resolution, angle_weight)
+    return built[angle_weight]
+
+
 def _nearby_nodes(valid: np.ndarray, maps, pose) -> list[tuple[int, int, int]]:
     """Valid lattice nodes around a pose (its own cell and heading first, then the neighbours)."""
     k0 = int(round(pose[5] / (2 * math.pi / YAW_BINS))) % YAW_BINS
@@ -118,8 +132,7 @@ def lattice_path(space, checker: BodyChecker, start_pose, goal_pose, check_step:
     """States of `space` (a ProjectedSpace) from start to goal through the lattice, shortcut; None if the
     lattice holds no path."""
     maps, res = checker.maps, checker.maps.resolution
-    valid = valid_grid(checker)
-    graph = _graph(valid, res, angle_weight)
+    valid, graph = lattice_of(checker, angle_weight)
     vector_of = lambda node: space.to_vector(np.array([maps.origin[0] + node[1] * res, maps.origin[1] + node[2] * res,
                                                        0.0, 0.0, 0.0, 2 * math.pi * node[0] / YAW_BINS]))
     start, goal = space.to_vector(start_pose), space.to_vector(goal_pose)

@@ -23,6 +23,7 @@ from legged.envs.vector import VectorEnv
 from legged.tasks import task_entry
 from legged.worlds.maps import HeightMaps
 from legged.worlds.terrain import Terrain
+from planners.body_check import BodyChecker
 from planners.body_planner import PlannerConfig, PlanningError, plan_path, replan
 from policies.evaluate import on_robot
 from policies.policy_io import actor_observation, load_policy
@@ -129,7 +130,8 @@ def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], phy
     spec = task_entry(run_config.task).robot
     start, goal = np.asarray(start, float), np.asarray(goal, float)
     try:
-        first_plan = plan_path(maps, start, goal, spec, planner)
+        checker = BodyChecker(maps, spec, planner.body)  # one per scene: replans reuse its lattice
+        first_plan = plan_path(maps, start, goal, spec, planner, checker)
     except PlanningError as exc:
         if "no collision-free path" in str(exc):
             raise Unreachable(f"the goal cannot be reached: {exc}") from None
@@ -147,7 +149,7 @@ def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], phy
     vector = VectorEnv(env, 1, physics, threads)
     reports = []
     for seed in seeds:
-        report = _follow(vector, env, policy, maps, goal, spec, first_plan, seed, config, planner, on_step)
+        report = _follow(vector, env, policy, checker, goal, spec, first_plan, seed, config, planner, on_step)
         reports.append(dict(report, physics=physics, time_limit_s=round(time_limit, 2), policy=str(policy.checkpoint),
                             robot=run_config.env.robot_model,
                             speed_limit_mps=None if math.isinf(limit) else limit,
@@ -157,7 +159,7 @@ def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], phy
     return reports
 
 
-def _follow(vector, env, policy, maps, goal, spec, first_plan, seed, config, planner, on_step) -> dict:
+def _follow(vector, env, policy, checker, goal, spec, first_plan, seed, config, planner, on_step) -> dict:
     """One navigation episode of `seed` along `first_plan`, replanning on straying or stalling."""
     plan = first_plan
     batch = vector.reset(jax.random.PRNGKey(seed), level_carry(np.zeros(1), 0))
@@ -186,7 +188,7 @@ def _follow(vector, env, policy, maps, goal, spec, first_plan, seed, config, pla
         stalled = (steps - last_progress_step) * env.dt > config.stall_seconds
         if (stray or stalled) and replans + failed_replans < config.max_replans:
             try:
-                plan = replan(maps, _pose_of(qpos), goal, spec, planner)
+                plan = replan(checker.maps, _pose_of(qpos), goal, spec, planner, checker)
             except PlanningError:
                 failed_replans += 1
                 last_progress_step = steps

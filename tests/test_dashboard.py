@@ -36,7 +36,7 @@ WAIT_S = 600.0
 """Longest wait for the dashboard (its start, a page element, a drawing): a guard against hangs, not a speed check.
 Every wait ends as soon as its condition holds; on a machine several times slower than usual the soccer
 dashboard's start alone took over 3 minutes."""
-VISION_STUDENT = ROOT / "assets/runs/soccer-1v1-vision-tracker-cpu2"
+VISION_STUDENT = ROOT / "assets/policies/op3-soccer-1v1-vision"
 """A trained vision student that estimates the ball, goals and opponent from its camera and its camera's sightings of
 the ball and goals, and steers by its tracker (the run behind the shipped camera player)."""
 PILOTED_STUDENT = ROOT / "assets/policies/op3-soccer-1v1-vision-piloted"

@@ -18,7 +18,7 @@ from policies.evaluate import confined_eval_config, one_tile_each, wilson_interv
 from policies.rsl_backend import build_ppo, dummy_observations
 from policies.warm_start import element_names, input_map, warm_start
 
-WALKER = Path(__file__).resolve().parents[1] / "assets" / "runs" / "go1-flat-native-cpu2"
+WALKER = Path(__file__).resolve().parents[1] / "assets" / "policies" / "go1-flat-walker-v1"
 
 
 def _info(level, succeeded, waypoint, path_len=10):

@@ -63,3 +63,21 @@ def test_planner_names_and_spaces():
     world = generate_world(0, 0)
     with pytest.raises(PlanningError, match="projected space"):
         plan_path(HeightMaps.from_world(world), world.start, world.goal, GO1, PlannerConfig(planner="lattice", space="full"))
+
+
+def test_replans_with_one_checker_reuse_its_lattice(monkeypatch):
+    """The lattice of a checker is built once: a second plan on it (a replan) does not filter the maps again
+    and finds the path a fresh checker finds."""
+    import planners.lattice as lattice
+    scene, maps = _scene(narrow_scenes(GO1)[-1].name)
+    config = PlannerConfig(planner="lattice")
+    checker = BodyChecker(maps, GO1, config.body)
+    built = []
+    real = lattice.valid_grid
+    monkeypatch.setattr(lattice, "valid_grid", lambda c: built.append(c) or real(c))
+    first = plan_path(maps, scene.start, scene.goal, GO1, config, checker)
+    again = plan_path(maps, scene.start, scene.goal, GO1, config, checker)
+    fresh = plan_path(maps, scene.start, scene.goal, GO1, config, BodyChecker(maps, GO1, config.body))
+    assert len(built) == 2  # the first checker's lattice and the fresh one's
+    np.testing.assert_array_equal(again.waypoints, first.waypoints)
+    np.testing.assert_array_equal(fresh.waypoints, first.waypoints)

@@ -1,6 +1,6 @@
-"""The repository stays small and its pointers stay true: no large file is tracked outside assets/policies/ but the
-listed legacy ones (which leave as they are removed), and every assets/ path that a page, a card or a shipped
-config names is there."""
+"""The repository stays small and its pointers stay true: no large file is tracked outside assets/policies/, no
+checkpoint under assets/runs/ but a few small ones tests read, a clone stays small, and every assets/ path that a
+page, a card or a shipped config names is there."""
 
 from __future__ import annotations
 
@@ -16,23 +16,17 @@ ROOT = Path(__file__).resolve().parents[1]
 MAX_BYTES = 5_000_000
 """A tracked file larger than this belongs in assets/policies/ (a shipped policy) or nowhere."""
 
-LEGACY_LARGE_FILES = (
-    # Read by a shipped config (init_from, distill.student_init) or by a test: they go once their readers point at
-    # assets/policies/ instead.
-    "assets/runs/soccer-1v1-prior-cpu2/checkpoints/step_000008355840.pt",
-    "assets/runs/soccer-1v1-prior-games-cpu2/checkpoints/step_000016011264.pt",
-    "assets/runs/soccer-1v1-vision-sight-cpu2/checkpoints/step_000001966080.pt",
-    "assets/runs/soccer-1v1-vision-tracker-cpu2/checkpoints/step_000001966080.pt",
-    # Checkpoints of cited runs that nothing reads, still to be removed.
-    "assets/runs/soccer-1v1-vision-heading-cpu2/checkpoints/step_000008011776.pt",
-    "assets/runs/soccer-1v1-vision-kl-cpu2/checkpoints/step_000001228800.pt",
-    "assets/runs/soccer-1v1-vision-memory-cpu2/checkpoints/step_000002088960.pt",
-    "assets/runs/soccer-1v1-vision-raw-cpu2/checkpoints/step_000001966080.pt",
-    "assets/runs/soccer-1v1-vision-stagger-cpu2/checkpoints/step_000014008320.pt",
-    "assets/runs/soccer-1v1-vision-wide-cpu2/checkpoints/step_000004792320.pt",
+MAX_TRACKED_BYTES = 150_000_000
+"""All tracked files together (a fresh clone's working tree; a link counts as a link) stay under this."""
+
+RUN_CHECKPOINTS = (
+    "assets/runs/go1-flat-brax-cpu2/checkpoints/step_000000737280.npz",    # tests/test_training_brax.py, test_average.py
+    "assets/runs/rough-dagger-cpu2/checkpoints/step_000010002432.pt",      # tests/test_average.py
+    "assets/runs/rough-rma-cpu2/checkpoints/step_000010002432.pt",         # tests/test_average.py
+    "assets/runs/confined-follower-levels-cpu2/checkpoints/step_000013762560.pt",  # a run still training
 )
-"""Files over MAX_BYTES outside assets/policies/ that are still tracked, each by its path. Remove a line when its
-file goes: the test fails on a listed file that no longer exists."""
+"""The only checkpoints under assets/runs/ (a run there keeps its config, metrics, evaluations and notes; the
+checkpoints users and configs load live in assets/policies/): small ones that tests read, each with its reader."""
 
 ASSET_PATH = re.compile(r"assets/[^\s`'\"()<>|;:,]*")
 """An assets/ path in running text, up to a space, a quote, a bracket or a separator."""
@@ -65,16 +59,27 @@ def _named_paths(text: str):
         yield path
 
 
-def test_no_large_file_outside_shipped_policies_but_the_listed_legacy_ones():
+def test_no_large_file_outside_shipped_policies_and_no_stray_run_checkpoint():
     tracked = _tracked_files()
-    large = sorted(f for f in tracked if not f.startswith("assets/policies/") and (ROOT / f).is_file()
-                   and (ROOT / f).stat().st_size > MAX_BYTES)
-    unlisted = [f"{f} ({(ROOT / f).stat().st_size / 1e6:.1f} MB)" for f in large if f not in LEGACY_LARGE_FILES]
-    assert not unlisted, ("files over 5 MB outside assets/policies/ (ship them as a policy or leave them out):\n"
-                          + "\n".join(unlisted))
-    gone = sorted(set(LEGACY_LARGE_FILES) - {f for f in tracked if (ROOT / f).is_file()})
-    assert not gone, "listed legacy files no longer in the repository (drop them from the list):\n" + "\n".join(gone)
-    assert len(set(LEGACY_LARGE_FILES)) == len(LEGACY_LARGE_FILES), "a legacy file is listed twice"
+    files = [f for f in tracked if (ROOT / f).is_file() and not (ROOT / f).is_symlink()]
+    large = [f"{f} ({(ROOT / f).stat().st_size / 1e6:.1f} MB)" for f in files
+             if not f.startswith("assets/policies/") and (ROOT / f).stat().st_size > MAX_BYTES]
+    assert not large, "files over 5 MB outside assets/policies/ (ship them as a policy or leave them out):\n" + "\n".join(large)
+    checkpoints = sorted(f for f in tracked if f.startswith("assets/runs/") and "/checkpoints/" in f)
+    stray = sorted(set(checkpoints) - set(RUN_CHECKPOINTS))
+    assert not stray, ("checkpoints under assets/runs/ (a checkpoint someone loads belongs in assets/policies/):\n"
+                       + "\n".join(stray))
+    gone = sorted(set(RUN_CHECKPOINTS) - set(checkpoints))
+    assert not gone, "listed run checkpoints no longer in the repository (drop them from the list):\n" + "\n".join(gone)
+
+
+def test_a_clone_stays_small_and_its_links_stay_inside():
+    tracked = _tracked_files()
+    total = sum((ROOT / f).lstat().st_size for f in tracked if (ROOT / f).exists() or (ROOT / f).is_symlink())
+    assert total < MAX_TRACKED_BYTES, f"tracked files hold {total / 1e6:.0f} MB, over {MAX_TRACKED_BYTES / 1e6:.0f} MB"
+    links = [f for f in tracked if (ROOT / f).is_symlink()]
+    broken = [f for f in links if not (ROOT / f).exists() or ROOT not in (ROOT / f).resolve().parents]
+    assert not broken, "links that lead nowhere or out of the repository:\n" + "\n".join(broken)
 
 
 def test_named_paths_skip_patterns_and_placeholders():
