@@ -13,7 +13,7 @@ from policies.policy_io import load_policy
 from policies.rsl_backend import load_checkpoint
 from policies.run_dir import RunDir, RunDirError
 
-SOURCE = "assets/runs/rough-dagger-cpu2"
+SOURCE = "tests/fixtures/runs/rough-dagger-cpu2"
 """A small committed distillation run (student, teacher, optimiser, normaliser)."""
 
 
@@ -104,8 +104,8 @@ def test_what_cannot_be_averaged_is_refused_before_writing(pair, tmp_path):
         ([a], "at least two"),
         ([a, _copy(tmp_path, "teacher", _other_teacher)], "different teachers"),
         ([a, _copy(tmp_path, "shape", _other_shape)], "not the same network"),
-        ([a, "assets/runs/go1-flat-brax-cpu2"], "rsl-rl checkpoints"),
-        ([a, "assets/runs/rough-rma-cpu2"], "differ in algo"),
+        ([a, "tests/fixtures/runs/go1-flat-brax-cpu2"], "rsl-rl checkpoints"),
+        ([a, "tests/fixtures/runs/rough-rma-cpu2"], "differ in algo"),
         ([a, tmp_path / "nothing"], "neither a run directory nor a checkpoint"),
     ]
     for sources, words in cases:

@@ -20,13 +20,10 @@ MAX_TRACKED_BYTES = 150_000_000
 """All tracked files together (a fresh clone's working tree; a link counts as a link) stay under this."""
 
 RUN_CHECKPOINTS = (
-    "assets/runs/go1-flat-brax-cpu2/checkpoints/step_000000737280.npz",    # tests/test_training_brax.py, test_average.py
-    "assets/runs/rough-dagger-cpu2/checkpoints/step_000010002432.pt",      # tests/test_average.py
-    "assets/runs/rough-rma-cpu2/checkpoints/step_000010002432.pt",         # tests/test_average.py
     "assets/runs/confined-follower-levels-cpu2/checkpoints/step_000013762560.pt",  # a run still training
 )
 """The only checkpoints under assets/runs/ (a run there keeps its config, metrics, evaluations and notes; the
-checkpoints users and configs load live in assets/policies/): small ones that tests read, each with its reader."""
+checkpoints users and configs load live in assets/policies/, those tests load in tests/fixtures/runs/)."""
 
 ASSET_PATH = re.compile(r"assets/[^\s`'\"()<>|;:,]*")
 """An assets/ path in running text, up to a space, a quote, a bracket or a separator."""

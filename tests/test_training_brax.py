@@ -6,7 +6,7 @@ The run trains a small pure-JAX environment with the task interface Brax trainin
 backend's start, resume, optimiser state, full resets and checkpoints do not depend on the task, and compiling
 Brax's PPO program around an MJX Go1 twice (start and resume) took 19 minutes of the suite on a slow 2-core
 machine. The Go1 MJX environment itself is checked in tests/test_envs.py and against native MuJoCo in
-tests/test_mjx_vs_native.py; assets/runs/go1-flat-brax-cpu2 is the Brax backend's Go1 run."""
+tests/test_mjx_vs_native.py; tests/fixtures/runs/go1-flat-brax-cpu2 is the Brax backend's Go1 run."""
 
 import dataclasses
 from pathlib import Path
@@ -25,7 +25,7 @@ from policies.policy_io import load_policy
 from policies.run_dir import RunDir
 from tests.conftest import BATCH, TINY_RUN as TINY
 
-GO1_BRAX_RUN = Path(__file__).resolve().parents[1] / "assets/runs/go1-flat-brax-cpu2"
+GO1_BRAX_RUN = Path(__file__).resolve().parents[1] / "tests/fixtures/runs/go1-flat-brax-cpu2"
 """The Brax backend's committed go1-flat run (config, metrics, final checkpoint)."""
 
 
