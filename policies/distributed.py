@@ -7,7 +7,9 @@
   Each process steps num_envs / G environments on its own GPU (JAX and torch on the same device),
   rsl-rl averages gradients and the KL-adapted learning rate over the processes (NCCL; gloo on the
   CPU), and only rank 0 writes the run directory. A checkpoint holds every process's curriculum levels (gathered
-  in rank order), and a resumed run gives each process its own share back.
+  in rank order), and a resumed run gives each process its own share back. After every update the processes
+  compare fingerprints of their whole training state (networks, normalisers, optimiser; `Launch.spread`): data
+  parallelism keeps them identical, and a run whose processes drift apart stops with the update it happened at.
 """
 
 from __future__ import annotations
@@ -78,11 +80,48 @@ class Launch:
         share = len(rows) // self.world_size
         return rows[self.rank * share:(self.rank + 1) * share]
 
+    def spread(self, state, device: str = "cpu") -> float:
+        """The largest difference between any process's `fingerprint(state)` and rank 0's: 0.0 when every process
+        holds the same training state. A collective: every process must call it."""
+        if not self.distributed:
+            return 0.0
+        import torch
+        import torch.distributed as dist
+
+        mine = fingerprint(state).to(device)
+        every = [torch.empty_like(mine) for _ in range(self.world_size)]
+        dist.all_gather(every, mine)
+        return max(float((other - every[0]).abs().max()) for other in every)
+
     def multi_gpu_config(self) -> dict | None:
         """rsl-rl's `multi_gpu` config entry."""
         if not self.distributed:
             return None
         return {"global_rank": self.rank, "local_rank": self.local_rank, "world_size": self.world_size}
+
+
+def fingerprint(state):
+    """A float64 summary of every tensor in a nested state (dicts, lists: networks, normalisers, an optimiser's
+    moments), in a fixed order: per tensor its sum and a sum weighted by position. Equal states give equal
+    fingerprints; a changed parameter changes them."""
+    import torch
+
+    parts = []
+
+    def walk(node):
+        if isinstance(node, torch.Tensor):
+            values = node.detach().to("cpu", torch.float64).flatten()
+            weights = torch.arange(values.numel(), dtype=torch.float64) % 13 + 1
+            parts.extend([values.sum(), (values * weights).sum()])
+        elif isinstance(node, dict):
+            for key in sorted(node, key=str):
+                walk(node[key])
+        elif isinstance(node, (list, tuple)):
+            for item in node:
+                walk(item)
+
+    walk(state)
+    return torch.stack(parts) if parts else torch.zeros(1, dtype=torch.float64)
 
 
 def init_torch_processes(launch: Launch, device: str) -> str:

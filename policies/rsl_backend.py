@@ -121,6 +121,11 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
             diverged = non_finite(losses, alg)
             iteration += 1
             hooks.after_update(alg, iteration)
+            spread = launch.spread(alg.save(), device) if launch.distributed else None
+            if spread:
+                raise TrainingDiverged(f"the {launch.world_size} training processes hold different networks after "
+                                       f"update {iteration} (fingerprints differ by {spread:.3g}); nothing was saved "
+                                       "after it. A part of the update runs in one process only.")
             step += per_iteration
             elapsed = time.perf_counter() - t0
             record = {"step": step, "iteration": iteration, "episode_return": None, "episode_length": None,
@@ -130,7 +135,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                       "learning_rate": alg.learning_rate,
                       "action_std": float(alg.get_policy().output_std.detach().mean()),
                       **{f"loss_{k}": float(v) for k, v in losses.items() if k != "symmetry"}, **diagnostics,
-                      **timing, **hooks.record(venv)}
+                      **timing, **hooks.record(venv), **({} if spread is None else {"process_spread": spread})}
             bar.update(per_iteration)
             bar.set_postfix(ret=_short(record["episode_return"]), sps=f"{record['steps_per_s']:.0f}")
             if diverged:
