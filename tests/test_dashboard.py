@@ -504,3 +504,16 @@ def test_a_vision_students_tracked_pose_is_recorded_and_shown(server, tmp_path):
     overlays.set_visible("tracked", False)
     assert not node.visible
     overlays.remove()
+
+
+def test_overlay_poses_turn_as_the_planner_and_the_urdf_read_them():
+    """The path overlay's quaternions (scipy) are MuJoCo's of the planner's roll, pitch, yaw (up to sign), and the
+    URDF writer's roll, pitch, yaw give the rotation back."""
+    from legged.soccer.placo.urdf import _rpy
+    from planners.body_check import quat_rpy, rotation_rpy
+    from web.overlays import quat_from_rpy
+
+    rpy = np.random.default_rng(0).uniform(-1.5, 1.5, (20, 3))
+    mujoco_quats = np.array([quat_rpy(*angles) for angles in rpy])
+    assert np.allclose(np.abs(np.sum(quat_from_rpy(rpy) * mujoco_quats, 1)), 1.0, atol=1e-12)
+    assert np.allclose([_rpy(rotation_rpy(*angles)) for angles in rpy], rpy, atol=1e-12)

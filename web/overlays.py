@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import viser
+from scipy.spatial.transform import Rotation
 
 from web.trajectory import Trajectory
 
@@ -27,11 +28,9 @@ COLOURS = {"path": (40, 120, 255), "target": (255, 140, 0), "floor_scan": (30, 1
 
 def quat_from_rpy(rpy: np.ndarray) -> np.ndarray:
     """Quaternions (w, x, y, z) of roll, pitch, yaw angles (..., 3) (rotation z-y-x, as the planner's poses)."""
-    half = np.asarray(rpy, np.float64) / 2
-    cr, cp, cy = np.cos(half[..., 0]), np.cos(half[..., 1]), np.cos(half[..., 2])
-    sr, sp, sy = np.sin(half[..., 0]), np.sin(half[..., 1]), np.sin(half[..., 2])
-    return np.stack([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
-                     cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy], -1)
+    rpy = np.asarray(rpy, np.float64)
+    quat = Rotation.from_euler("xyz", rpy.reshape(-1, 3)).as_quat(scalar_first=True)
+    return quat.reshape(rpy.shape[:-1] + (4,))
 
 
 class Overlays:

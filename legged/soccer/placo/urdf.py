@@ -26,6 +26,7 @@ from xml.sax.saxutils import quoteattr
 
 import mujoco
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from legged.files import write_atomic
 from legged.robots.op3 import OP3
@@ -46,11 +47,8 @@ def _quat_to_matrix(quat: np.ndarray) -> np.ndarray:
 
 
 def _rpy(rot: np.ndarray) -> tuple[float, float, float]:
-    """URDF roll-pitch-yaw (fixed-axis x, then y, then z: R = Rz(yaw) Ry(pitch) Rx(roll)) of `rot`."""
-    pitch = float(np.arctan2(-rot[2, 0], np.hypot(rot[0, 0], rot[1, 0])))
-    if np.hypot(rot[0, 0], rot[1, 0]) < 1e-9:  # gimbal lock: put everything in yaw
-        return 0.0, pitch, float(np.arctan2(-rot[0, 1], rot[1, 1]))
-    return float(np.arctan2(rot[2, 1], rot[2, 2])), pitch, float(np.arctan2(rot[1, 0], rot[0, 0]))
+    """URDF roll-pitch-yaw (fixed axes x, then y, then z: R = Rz(yaw) Ry(pitch) Rx(roll)) of `rot`."""
+    return tuple(float(a) for a in Rotation.from_matrix(rot).as_euler("xyz"))
 
 
 def _fmt(values) -> str:
