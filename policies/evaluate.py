@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import jax
 import numpy as np
@@ -25,8 +26,9 @@ HELD_OUT_SEED_OFFSET = 1_000_003
 def held_out(task: str, env_config):
     """The env config with held-out worlds (confined tasks) or terrain (rough ground: every level, no
     curriculum), and no time-limit change."""
-    if task_entry(task).kind == "confined":
-        return dataclasses.replace(env_config, world_seed=env_config.world_seed + HELD_OUT_SEED_OFFSET)
+    if task_entry(task).kind == "confined":  # whole episodes: a stalled robot is not cut short as in training
+        return dataclasses.replace(env_config, world_seed=env_config.world_seed + HELD_OUT_SEED_OFFSET,
+                                   stall_timeout_s=math.inf)
     if hasattr(env_config, "terrain_seed"):
         return dataclasses.replace(env_config, terrain_seed=env_config.terrain_seed + HELD_OUT_SEED_OFFSET,
                                    curriculum=False)
@@ -174,10 +176,11 @@ def wilson_interval(successes: int, trials: int, z: float = 1.96) -> list[float]
 
 def confined_eval_config(env_config, difficulty: int, episodes: int, world_seed: int | None):
     """The env config of a fixed confined evaluation: `episodes` held-out worlds of one difficulty (seed
-    `world_seed`, by default the training seed + HELD_OUT_SEED_OFFSET), one episode per world, no curriculum."""
+    `world_seed`, by default the training seed + HELD_OUT_SEED_OFFSET), one episode per world, no curriculum, whole
+    episodes (no stall timeout)."""
     seed = env_config.world_seed + HELD_OUT_SEED_OFFSET if world_seed is None else world_seed
     return dataclasses.replace(env_config, world_seed=seed, num_worlds=episodes, difficulties=(difficulty,),
-                               curriculum=False)
+                               curriculum=False, stall_timeout_s=math.inf)
 
 
 def one_tile_each(first: int, count: int, tiles: int) -> dict:

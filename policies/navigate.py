@@ -139,7 +139,8 @@ def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], phy
     time_limit = time_limit_s if time_limit_s is not None else 20.0 + config.seconds_per_metre * first_plan.length_m
     limit = run_config.env.max_speed if max_speed is None else max_speed  # one limit, not a training draw
     env_config = dataclasses.replace(run_config.env, num_worlds=1, curriculum=False, spawn_yaw=0.0,
-                                     episode_seconds=time_limit, max_speed=limit, speed_range=None)
+                                     episode_seconds=time_limit, max_speed=limit, speed_range=None,
+                                     stall_timeout_s=math.inf)  # a stalled robot is replanned, not stopped
     env = ConfinedEnv(env_config, spec, terrain_of(maps, start, goal),
                       [first_plan.waypoints], path_capacity=PATH_CAPACITY, speeds=[plan_speeds(first_plan)])
     try:

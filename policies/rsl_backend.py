@@ -86,6 +86,8 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     layout = env.observation_layout() if config.algo != "ppo" and hasattr(env, "observation_layout") else None
     if layout is not None and not privileged_slices(layout):  # no randomised dynamics to probe (soccer)
         layout = None
+    if resume and launch.is_main:
+        run.forget_after(step)
     earlier = run.metrics() if resume else []
     wall0 = time.perf_counter() - ((earlier[-1].get("wall_s") or 0.0) if earlier else 0.0)  # resumed runs go on
     clock = time.perf_counter

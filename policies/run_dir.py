@@ -122,6 +122,15 @@ class RunDir:
                     writer.add_scalar(k, v, record["step"])
             writer.flush()
 
+    def forget_after(self, step: int) -> int:
+        """Drop the metrics records written after env step `step` (a resumed run's checkpoint: a killed run logged
+        past its last checkpoint, and the resumed run writes those iterations again); the number dropped."""
+        records = self.metrics()
+        kept = [r for r in records if r["step"] <= step]
+        if len(kept) < len(records):
+            write_atomic(self.metrics_path, "".join(json.dumps(r) + "\n" for r in kept))
+        return len(records) - len(kept)
+
     def metrics(self) -> list[dict]:
         """All metrics records so far; a line cut short (a killed run, or one being written) is skipped."""
         try:

@@ -1,6 +1,7 @@
 """The confined tasks' speed limit: exploration pays no speed beyond it, `overspeed` charges for the excess, a
 planned path may lower it at its waypoints, and a policy trained with `speed_command` is told the limit in force.
-Runs saved before the limit existed load with their old observations.
+Runs saved before the limit existed load with their old observations. A robot that stands still too long ends its
+training episode (`stall_timeout_s`), never an evaluation's.
 
 The task's hooks are called directly on a spawned episode (no physics, nothing compiled): the file takes seconds.
 """
@@ -169,6 +170,7 @@ def test_new_runs_train_with_the_limit_in_the_command_over_a_range_of_limits():
     for task in ("confined-waypoints", "confined-goal", "confined-velocity", "confined-skills"):
         config = default_config(task)
         assert config.speed_command and config.speed_range == (0.3, 1.0) and config.max_speed == 1.0, task
+        assert config.stall_timeout_s == 3.0, task  # and a stalled training episode ends
 
 
 def test_the_shipped_follower_loads_with_its_old_observations(terrain):
@@ -187,3 +189,27 @@ def test_the_shipped_follower_loads_with_its_old_observations(terrain):
     assert told.observation_size["state"][0] == env.observation_size["state"][0] + 1
     with pytest.raises(RunDirError):
         check_policy(policy, told)
+
+
+def test_a_robot_standing_still_too_long_ends_its_training_episode_only(terrain):
+    from policies.evaluate import confined_eval_config, held_out
+
+    env = _env(terrain, stall_timeout_s=0.1)
+    steps = round(0.1 / env.dt)  # 5 control steps at 50 Hz
+    view, info = _moving(env, 0.0)
+    for _ in range(steps):
+        assert not bool(env._task_failed(view, info))
+        _, _, metrics, info = env._task_step(view, info, jnp.zeros(env.action_size))
+    assert int(info["stalled_steps"]) == steps and bool(env._task_failed(view, info)) and float(metrics["stalled_out"]) == 1
+    moving, _ = _moving(env, 0.5)
+    _, _, metrics, info = env._task_step(moving, info, jnp.zeros(env.action_size))
+    assert int(info["stalled_steps"]) == 0 and float(metrics["stalled_out"]) == 0  # a step on the move starts it over
+    view, info = _moving(_env(terrain), 0.0)
+    for _ in range(steps):
+        _, _, _, info = env._task_step(view, info, jnp.zeros(env.action_size))
+    assert not bool(_env(terrain)._task_failed(view, info))  # the default: never (runs saved before it existed)
+    config = env.config
+    assert confined_eval_config(config, 2, 10, None).stall_timeout_s == float("inf")
+    assert held_out("confined-waypoints", config).stall_timeout_s == float("inf")
+    with pytest.raises(ValueError, match="stall_timeout_s must be a positive"):
+        ConfinedConfig(stall_timeout_s=0.0)

@@ -5,6 +5,7 @@ shipped waypoint follower walking Go1 through it to the goal (native MuJoCo by d
 from __future__ import annotations
 
 import json
+import math
 import time
 
 from legged.cli.args import SEED, add_server_options, bounded, choices
@@ -77,7 +78,8 @@ def _serve(world, plan, policy_dir: str, seed: int, view: dict, physics: str) ->
     from web.source import RolloutSource
 
     policy, config = load_follower(policy_dir)
-    env_config = dataclasses.replace(config.env, num_worlds=1, curriculum=False, spawn_yaw=0.0)
+    env_config = dataclasses.replace(config.env, num_worlds=1, curriculum=False, spawn_yaw=0.0,
+                                     stall_timeout_s=math.inf)
     env = ConfinedEnv(env_config, GO1, Terrain.from_worlds([world]), [plan.waypoints])
     source = RolloutSource(env, f"{config.task} (demo world)", RecorderConfig(physics=physics), policy)
     dashboard = Dashboard(DashboardConfig(host=view["host"], port=view["port"], seed=seed,

@@ -142,6 +142,11 @@ class LeggedEnv(MjxEnv, abc.ABC):
         limit), e.g. the robot walked off the terrain; default never."""
         return jnp.bool_(False)
 
+    def _task_failed(self, data, info: dict) -> jax.Array:
+        """Whether the episode must end now as the policy's failure (not bootstrapped, like a fall), e.g. it stood
+        still too long; default never."""
+        return jnp.bool_(False)
+
     # ----------------------------------------------------------------- helpers for tasks
     def floor_height(self, xy):
         """Exact floor height under world points xy (..., 2)."""
@@ -308,13 +313,14 @@ class LeggedEnv(MjxEnv, abc.ABC):
         height = base[2] - self.floor_height(base[:2])
         fell = (height < cfg.fall_height) | (up_z(self.base_rotation(data)) < cfg.flip_up_z)
         time_out = (info["step"] >= cfg.episode_steps) | self._task_truncated(data, info)
-        done = fell | success | time_out | bad
+        failed = self._task_failed(data, info)
+        done = fell | failed | success | time_out | bad
         reward = sum(terms.values())
         if cfg.only_positive_rewards:
             reward = jnp.maximum(reward, 0.0)
         reward = jnp.where(bad, 0.0, reward)
         ended_well = (time_out | success) if self.success_is_truncation else (time_out & ~success)
-        info["truncation"] = (ended_well & ~fell & ~bad).astype(jnp.float32)
+        info["truncation"] = (ended_well & ~fell & ~failed & ~bad).astype(jnp.float32)
         info["last_action"], info["last_qvel"] = action, qd
         obs, info = self._observe(data, info, k_noise)
         metrics = {f"reward/{k}": v for k, v in terms.items()}

@@ -89,6 +89,10 @@ class ConfinedConfig(EnvConfig):
     """Below this base speed (m/s) ..."""
     stall_distance: float = 0.3
     """... while farther than this from the target (m), a step counts as stalling."""
+    stall_timeout_s: float = math.inf
+    """End an episode as a failure (not bootstrapped) once it has stalled this long without a break, seconds, so
+    that a robot standing still stops filling the rollouts (inf: never, as runs saved before it existed). Training
+    only: evaluation and navigation set it to inf (navigation replans a stalled robot instead)."""
     command_speed: float = 0.5
     """Commanded speed toward the waypoint in velocity and skills modes, m/s (lowered to the speed limit in force)."""
     max_speed: float = math.inf
@@ -129,6 +133,9 @@ class ConfinedConfig(EnvConfig):
     def __post_init__(self):
         if not 0.0 < self.max_speed <= math.inf:  # NaN fails here too
             raise ValueError(f"max_speed (the speed limit) must be a positive number of m/s, got {self.max_speed!r}")
+        if not self.stall_timeout_s > 0.0:  # NaN fails here too
+            raise ValueError(f"stall_timeout_s must be a positive number of seconds (inf: never), got "
+                             f"{self.stall_timeout_s!r}")
         if self.speed_range is not None:
             r = tuple(self.speed_range)
             if len(r) != 2 or not 0.0 < r[0] <= r[1] < math.inf:
@@ -217,7 +224,8 @@ class ConfinedEnv(LeggedEnv):
             limit = jnp.minimum(jax.random.uniform(jax.random.fold_in(rng, 1), minval=low, maxval=high), limit)
         info = dict(tile=tile, level=level, waypoint=jnp.int32(1), goal=self._goals[tile], succeeded=jnp.bool_(False),
                     path=self._paths[tile], path_len=self._path_len[tile], speeds=self._speeds[tile],
-                    speed_limit=limit, speed_sum=jnp.float32(0.0), overspeed_sum=jnp.float32(0.0))
+                    speed_limit=limit, speed_sum=jnp.float32(0.0), overspeed_sum=jnp.float32(0.0),
+                    stalled_steps=jnp.int32(0))
         return jnp.array([start[0], start[1], z]), yaw, info
 
     def _target(self, info) -> jax.Array:
@@ -268,6 +276,10 @@ class ConfinedEnv(LeggedEnv):
         scans = jnp.concatenate([ceiling, floor])
         return scans, jnp.full_like(scans, self.config.noise.height_scan)
 
+    def _task_failed(self, data, info):
+        """Stalled for `stall_timeout_s` without a break."""
+        return info["stalled_steps"] * self.dt >= self.config.stall_timeout_s - 1e-6  # 5 x 0.02 s is 0.1 s
+
     @property
     def success_is_truncation(self) -> bool:
         return self.config.success_bootstraps
@@ -289,10 +301,11 @@ class ConfinedEnv(LeggedEnv):
         speed = jnp.linalg.norm(vel[:2])
         limit = self.speed_limit(info)
         overspeed = jnp.maximum(speed - limit, 0.0)
+        stalling = (speed < cfg.stall_speed) & (dist > cfg.stall_distance)
         terms = {
             "goal_reached": w.goal_reached * success,
             "waypoint_reached": w.waypoint_reached * reached,
-            "stalling": w.stalling * ((speed < cfg.stall_speed) & (dist > cfg.stall_distance)),
+            "stalling": w.stalling * stalling,
             "overspeed": w.overspeed * overspeed,
         }
         if cfg.mode in ("waypoints", "goal"):
@@ -313,6 +326,7 @@ class ConfinedEnv(LeggedEnv):
                 terms["tracking_pose"] = w.tracking_pose * tracking(err, 0.02)
         info["waypoint"] = jnp.where(reached, info["waypoint"] + 1, info["waypoint"])
         info["succeeded"] = success
+        info["stalled_steps"] = jnp.where(stalling, info["stalled_steps"] + 1, 0)
         info["speed_sum"] = info["speed_sum"] + speed
         info["overspeed_sum"] = info["overspeed_sum"] + overspeed
         metrics = {
@@ -326,5 +340,6 @@ class ConfinedEnv(LeggedEnv):
             "speed_limit": limit,
             "mean_speed_mps": info["speed_sum"] / info["step"],
             "overspeed_mps": info["overspeed_sum"] / info["step"],
+            "stalled_out": self._task_failed(data, info).astype(jnp.float32),
         }
         return terms, success, metrics, info
