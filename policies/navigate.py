@@ -161,7 +161,8 @@ def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], phy
 
 
 def _follow(vector, env, policy, checker, goal, spec, first_plan, seed, config, planner, on_step) -> dict:
-    """One navigation episode of `seed` along `first_plan`, replanning on straying or stalling."""
+    """One navigation episode of `seed` along `first_plan`, replanning on straying or stalling with `checker` (the
+    scene's BodyChecker, whose lattice each replan reuses)."""
     plan = first_plan
     batch = vector.reset(jax.random.PRNGKey(seed), level_carry(np.zeros(1), 0))
     policy.reset()
