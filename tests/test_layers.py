@@ -267,3 +267,19 @@ def test_imports_inside_functions_do_not_grow():
     assert len(lazy) <= LAZY_IMPORTS, f"{len(lazy)} imports of project modules inside functions, more than " \
         f"{LAZY_IMPORTS}: import at the top of the module (move code to the layer it belongs in if that makes a " \
         "cycle), or justify it beside the import and raise LAZY_IMPORTS:\n" + "\n".join(lazy)
+
+
+def test_every_module_imports():
+    """Every module of the four packages imports (command-line entry scripts `__main__` aside): the fast tier
+    (`pytest -m "not slow"`) touches each one at least this far."""
+    import importlib
+
+    failed = []
+    for name, _ in _modules():
+        if name.endswith("__main__"):
+            continue
+        try:
+            importlib.import_module(name)
+        except Exception as exc:  # noqa: BLE001 (the report names every module that fails, and why)
+            failed.append(f"{name}: {exc!r}")
+    assert not failed, "\n".join(failed)
