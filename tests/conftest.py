@@ -38,14 +38,29 @@ per process, and building the confined env and tracing the two envs again in ano
 slow machine (the persistent XLA cache below saves their compilation, not their tracing)."""
 
 
+SLOW_FILES = ("test_vision_distill.py", "test_soccer_env.py", "test_envs.py", "test_dashboard.py", "test_training.py",
+              "test_distributed.py", "test_walker.py", "test_skills.py", "test_mjx_vs_native.py", "test_op3_randomize.py",
+              "test_native_raycam.py", "test_soccer_training.py", "test_steered.py", "test_op3_fidelity.py",
+              "test_training_brax.py", "test_follower.py", "test_native.py", "test_distill.py", "test_placo_player.py",
+              "test_resume_losses.py", "test_raycam.py", "test_tracker.py", "test_randomize.py",
+              "test_peer_dm_control.py")
+"""Files whose tests compile environments, train, or drive a browser (each over 14 s of test time on 2 cores,
+`--durations=0`, 2026-12-04): every test in them is marked `slow`. `pytest -m "not slow"` is the fast tier for
+development (every module still imported by tests/test_layers.py); the full suite runs everything."""
+
+
 def _group(path: str) -> str:
     """The scheduling unit of a test file: its SHARED_COMPILATIONS group, or the file itself."""
     return SHARED_COMPILATIONS.get(os.path.basename(path), path)
 
 
 def pytest_collection_modifyitems(items):
-    """Run the heaviest test files first (HEAVIEST_FILES), the files of a SHARED_COMPILATIONS group together
-    (at the place of the group's heaviest file); with `--no-loadscope-reorder` pytest-xdist keeps this order."""
+    """Mark the tests of SLOW_FILES `slow`; run the heaviest test files first (HEAVIEST_FILES), the files of a
+    SHARED_COMPILATIONS group together (at the place of the group's heaviest file); with `--no-loadscope-reorder`
+    pytest-xdist keeps this order."""
+    for item in items:
+        if item.path.name in SLOW_FILES:
+            item.add_marker(pytest.mark.slow)
     rank = {name: k for k, name in enumerate(HEAVIEST_FILES)}
     first = {}
     for item in items:
