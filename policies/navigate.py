@@ -25,7 +25,7 @@ from legged.worlds.maps import HeightMaps
 from legged.worlds.terrain import Terrain
 from planners.body_check import BodyChecker
 from planners.body_planner import PlannerConfig, PlanningError, plan_path, replan
-from policies.evaluate import on_robot
+from policies.evaluate import nominal_config, on_robot
 from policies.policy_io import actor_observation, load_policy
 from policies.run_dir import RunDir, RunDirError, check_policy
 
@@ -104,16 +104,18 @@ def load_follower(run_dir, robot: str = "project", physics: str | None = None):
 def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", threads: int | None = None,
              config: NavigateConfig = NavigateConfig(), planner: PlannerConfig = PlannerConfig(), seed: int = 0,
              on_step=None, robot: str = "project", time_limit_s: float | None = None,
-             max_speed: float | None = None) -> dict:
+             max_speed: float | None = None, nominal: bool = False) -> dict:
     """Plan from start to goal, follow with the run's policy, replan on straying; the outcome as a dict.
     `on_step(env, state, plan)` is called at the start and after every control step but the last (viewers). Raises NavigationError (the
     policy cannot navigate, or the start or goal is unusable; Unreachable when no path exists) before any
     compilation. `robot`: the robot model the follower walks (legged.robots.models). `time_limit_s`: the
     navigation's time limit (default: 20 s plus `config.seconds_per_metre` per metre of the first plan).
     `max_speed`: the speed limit, m/s (default: the run's `env.max_speed`; a follower trained with
-    `env.speed_command` is told it, one trained without runs at its own speed and is only measured against it)."""
+    `env.speed_command` is told it, one trained without runs at its own speed and is only measured against it).
+    `nominal`: the robot model as it is (the run's domain randomisation and observation noise off); by default each
+    episode draws a robot from the run's randomisation, as in training."""
     report = navigate_seeds(run_dir, maps, start, goal, [seed], physics, threads, config, planner, on_step, robot,
-                            time_limit_s, max_speed=max_speed)[0]
+                            time_limit_s, max_speed=max_speed, nominal=nominal)[0]
     report.pop("speeds_mps")
     return report
 
@@ -121,12 +123,15 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
 def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], physics: str = "native",
                    threads: int | None = None, config: NavigateConfig = NavigateConfig(),
                    planner: PlannerConfig = PlannerConfig(), on_step=None, robot: str = "project",
-                   time_limit_s: float | None = None, progress=None, max_speed: float | None = None) -> list[dict]:
+                   time_limit_s: float | None = None, progress=None, max_speed: float | None = None,
+                   nominal: bool = False) -> list[dict]:
     """`navigate` once per episode seed, planned and compiled once (the same plan, another episode each);
     `progress()` is called after each. Each report also holds `speeds_mps`, the body's horizontal speed at every
     control step."""
     check_speed_limit(max_speed)
     policy, run_config = load_follower(run_dir, robot, physics)
+    if nominal:
+        run_config = dataclasses.replace(run_config, env=nominal_config(run_config.env))
     spec = task_entry(run_config.task).robot
     start, goal = np.asarray(start, float), np.asarray(goal, float)
     try:

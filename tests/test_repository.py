@@ -19,11 +19,10 @@ MAX_BYTES = 5_000_000
 MAX_TRACKED_BYTES = 150_000_000
 """All tracked files together (a fresh clone's working tree; a link counts as a link) stay under this."""
 
-RUN_CHECKPOINTS = (
-    "assets/runs/confined-follower-levels-cpu2/checkpoints/step_000013762560.pt",  # a run still training
-)
-"""The only checkpoints under assets/runs/ (a run there keeps its config, metrics, evaluations and notes; the
-checkpoints users and configs load live in assets/policies/, those tests load in tests/fixtures/runs/)."""
+RUN_CHECKPOINTS: tuple[str, ...] = ()
+"""The only checkpoints allowed under assets/runs/, each with its reason (e.g. a run that goes on training in the next
+session); a run there keeps its config, metrics, evaluations and notes, the checkpoints users and configs load live
+in assets/policies/, those tests load in tests/fixtures/runs/."""
 
 ASSET_PATH = re.compile(r"assets/[^\s`'\"()<>|;:,]*")
 """An assets/ path in running text, up to a space, a quote, a bracket or a separator."""

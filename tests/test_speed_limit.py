@@ -1,7 +1,7 @@
 """The confined tasks' speed limit: exploration pays no speed beyond it, `overspeed` charges for the excess, a
 planned path may lower it at its waypoints, and a policy trained with `speed_command` is told the limit in force.
 Runs saved before the limit existed load with their old observations. A robot that stands still too long ends its
-training episode (`stall_timeout_s`), never an evaluation's.
+training episode (`stall_timeout_s`), never an evaluation's, and navigation runs the robot model as it is when asked.
 
 The task's hooks are called directly on a spawned episode (no physics, nothing compiled): the file takes seconds.
 """
@@ -20,8 +20,8 @@ from legged.envs.confined import ConfinedConfig, ConfinedEnv
 from legged.envs.paths import pad_speeds, straight_path
 from legged.worlds import Terrain, generate_world
 
-FOLLOWER = Path(__file__).resolve().parents[1] / "assets" / "policies" / "go1-confined-follower"
-"""The shipped waypoint follower, trained before the speed limit existed."""
+FOLLOWER = Path(__file__).resolve().parents[1] / "assets" / "policies" / "go1-confined-follower-v1"
+"""The tunnel follower (shipped until the level-world follower replaced it), trained before the speed limit existed."""
 NOMINAL = dict(randomization=RandomizationConfig(), noise=NoiseConfig())
 
 
@@ -173,7 +173,7 @@ def test_new_runs_train_with_the_limit_in_the_command_over_a_range_of_limits():
         assert config.stall_timeout_s == 3.0, task  # and a stalled training episode ends
 
 
-def test_the_shipped_follower_loads_with_its_old_observations(terrain):
+def test_the_tunnel_follower_loads_with_its_old_observations(terrain):
     """Its config.yaml predates the speed limit: it loads with the dataclass defaults (no speed in the command, one
     limit for every episode), and its policy reads the observations it was trained on."""
     from policies.policy_io import load_policy
@@ -213,3 +213,26 @@ def test_a_robot_standing_still_too_long_ends_its_training_episode_only(terrain)
     assert held_out("confined-waypoints", config).stall_timeout_s == float("inf")
     with pytest.raises(ValueError, match="stall_timeout_s must be a positive"):
         ConfinedConfig(stall_timeout_s=0.0)
+
+
+def test_navigation_draws_a_robot_per_episode_unless_asked_for_it_as_it_is(monkeypatch):
+    """`navigate(..., nominal=True)` (the demo's) runs the robot model as it is: randomisation and noise off."""
+    import policies.navigate as nav
+
+    class Built(Exception):
+        pass
+
+    seen = []
+
+    def built(config, *args, **kwargs):
+        seen.append(config)
+        raise Built
+
+    monkeypatch.setattr(nav, "ConfinedEnv", built)
+    world = generate_world(11, 0)
+    shipped = FOLLOWER.parent / "go1-confined-follower"
+    for nominal in (False, True):
+        with pytest.raises(Built):
+            nav.navigate_seeds(str(shipped), world, world.start, world.goal, [0], nominal=nominal)
+    assert [(c.randomization.enabled, c.noise.enabled) for c in seen] == [(True, True), (False, False)]
+    assert all(c.stall_timeout_s == float("inf") for c in seen)  # a stalled robot is replanned, never cut short

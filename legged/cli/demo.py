@@ -1,6 +1,6 @@
-"""`legged demo`: a generated world (a tunnel by default, or a level world: `--level 3 --seed 48` is a corridor
-with a step, a side block, a low bar and a 66-degree turn under a roof), an OMPL body-pose plan through it, and the
-shipped waypoint follower walking Go1 through it to the goal (native MuJoCo by default; MJX too on request)."""
+"""`legged demo`: a generated level world (by default level 3, seed 48: a corridor under a 0.62 m roof with a step, a
+side block, a low bar and a 66-degree turn; `--tunnel` for the generator's tunnels), a body-pose plan through it,
+and the shipped waypoint follower walking Go1 through it to the goal (native MuJoCo by default; MJX too on request)."""
 
 from __future__ import annotations
 
@@ -16,14 +16,14 @@ def cmd_demo(args) -> int:
     """`legged demo`: world, plan and navigation, printed as they happen; 0 if Go1 reached the goal."""
     view = {"host": args.host, "port": args.port} if args.view else None
     return run_demo(args.out, args.seed, args.difficulty, shipped_policy(args.policy), view=view,
-                    physics=args.physics, level=args.level)
+                    physics=args.physics, level=None if args.tunnel else args.level)
 
 
 def run_demo(out: str, seed: int, difficulty: int, policy_dir: str, view: dict | None = None,
              physics=("native",), level: int | None = None) -> int:
     """Write a world (a tunnel of `difficulty`, or with `level` that level of legged.worlds.levels), plan through it
-    and navigate it with the follower of `policy_dir` on each of `physics`; 0 if Go1 reached the goal on every
-    engine. With `view` ({'host', 'port'}) the dashboard is served afterwards on the demo's world, rolling out the
+    and navigate it with the follower of `policy_dir` on each of `physics`, on the project's Go1 as it is (no
+    randomisation or observation noise); 0 if Go1 reached the goal on every engine. With `view` ({'host', 'port'}) the dashboard is served afterwards on the demo's world, rolling out the
     follower."""
     from legged.robots import GO1
     from legged.worlds import write_world
@@ -48,7 +48,7 @@ def run_demo(out: str, seed: int, difficulty: int, policy_dir: str, view: dict |
         print(f"[demo] Go1 follows the plan with {policy_dir} in {engine} physics (compiling first: "
               f"{'about a minute' if engine == 'mjx' else 'about 20 s'}) ...", flush=True)
         began = time.perf_counter()
-        runs[engine] = navigate(policy_dir, world, world.start, world.goal, engine, seed=seed)
+        runs[engine] = navigate(policy_dir, world, world.start, world.goal, engine, seed=seed, nominal=True)
         runs[engine]["wall_s"] = round(time.perf_counter() - began, 1)
         r = runs[engine]
         print(f"[demo] {engine}: {'reached the goal' if r['success'] else 'did NOT reach the goal'} in "
@@ -72,13 +72,13 @@ def _serve(world, plan, policy_dir: str, seed: int, view: dict, physics: str) ->
     from legged.envs.confined import ConfinedEnv
     from legged.robots import GO1
     from legged.worlds import Terrain
-    from policies.navigate import load_follower
+    from policies.navigate import load_follower, nominal_config
     from web.app import Dashboard, DashboardConfig
     from web.rollout import RecorderConfig
     from web.source import RolloutSource
 
     policy, config = load_follower(policy_dir)
-    env_config = dataclasses.replace(config.env, num_worlds=1, curriculum=False, spawn_yaw=0.0,
+    env_config = dataclasses.replace(nominal_config(config.env), num_worlds=1, curriculum=False, spawn_yaw=0.0,
                                      stall_timeout_s=math.inf)
     env = ConfinedEnv(env_config, GO1, Terrain.from_worlds([world]), [plan.waypoints])
     source = RolloutSource(env, f"{config.task} (demo world)", RecorderConfig(physics=physics), policy)
@@ -93,12 +93,15 @@ def add_demo_command(sub) -> None:
     d = sub.add_parser("demo", help="generate a world, plan through it, and watch the shipped follower walk Go1 "
                                     "to the goal")
     d.add_argument("--out", default="legged-demo", help="where to write the world files")
-    d.add_argument("--seed", type=SEED, default=0, help="world seed (with --level 3, 48 is a corridor with a step, a "
-                                                        "side block, a low bar and a 66-degree turn under a 0.62 m roof)")
-    d.add_argument("--difficulty", type=bounded(int, 0, 20), default=1, help="difficulty of the tunnel")
-    d.add_argument("--level", type=bounded(int, 0, 4), default=None,
-                   help="a level world instead of a tunnel: 0-4 (tunnels; corridors; bars, blocks, pillars; steps, "
-                        "ramps, turns; voids)")
+    d.add_argument("--seed", type=SEED, default=48, help="world seed (default 48: at level 3 a corridor with a step, "
+                                                         "a side block, a low bar and a 66-degree turn under a 0.62 m "
+                                                         "roof)")
+    d.add_argument("--level", type=bounded(int, 0, 4), default=3,
+                   help="the level of the world: 0-4 (tunnels; corridors; bars, blocks, pillars; steps, ramps, "
+                        "turns; voids; default 3)")
+    d.add_argument("--tunnel", action="store_true", help="the generator's pyramid tunnel of --difficulty instead "
+                                                         "of a level world")
+    d.add_argument("--difficulty", type=bounded(int, 0, 20), default=1, help="difficulty of the tunnel (--tunnel)")
     d.add_argument("--policy", default=None, help="a waypoint-follower run (default: the shipped follower)")
     d.add_argument("--physics", type=choices("mjx", "native"), default=["native"],
                    help="comma-separated physics engines to navigate in (default native; mjx,native runs both)")
