@@ -23,8 +23,8 @@ def run_demo(out: str, seed: int, difficulty: int, policy_dir: str, view: dict |
              physics=("native",), level: int | None = None) -> int:
     """Write a world (a tunnel of `difficulty`, or with `level` that level of legged.worlds.levels), plan through it
     and navigate it with the follower of `policy_dir` on each of `physics`, on the project's Go1 as it is (no
-    randomisation or observation noise); 0 if Go1 reached the goal on every engine. With `view` ({'host', 'port'}) the dashboard is served afterwards on the demo's world, rolling out the
-    follower."""
+    randomisation or observation noise); 0 if Go1 reached the goal on every engine. With `view` ({'host', 'port'})
+    the dashboard is served afterwards on the demo's world, rolling out the follower."""
     from legged.robots import GO1
     from legged.worlds import write_world
     from planners import HeightMaps, PlannerConfig, plan_path
