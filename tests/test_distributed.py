@@ -53,8 +53,9 @@ def test_one_process_keeps_its_rows():
 
 
 def test_fingerprints_tell_states_apart():
-    state = {"actor": {"w": torch.ones(3, 2), "b": torch.zeros(2)}, "optimizer": {"state": {0: {"step": torch.tensor(4.0)}}}}
-    same = {"optimizer": {"state": {0: {"step": torch.tensor(4.0)}}}, "actor": {"b": torch.zeros(2), "w": torch.ones(3, 2)}}
+    step = {"state": {0: {"step": torch.tensor(4.0)}}}
+    state = {"actor": {"w": torch.ones(3, 2), "b": torch.zeros(2)}, "optimizer": step}
+    same = {"optimizer": step, "actor": {"b": torch.zeros(2), "w": torch.ones(3, 2)}}
     assert torch.equal(fingerprint(state), fingerprint(same))  # the order of the keys does not matter
     swapped = {**state, "actor": {"w": torch.tensor([[1.0, 1.0], [1.0, 2.0], [0.0, 1.0]]), "b": torch.zeros(2)}}
     assert not torch.equal(fingerprint(state), fingerprint(swapped))  # same sum, other places

@@ -60,7 +60,8 @@ def test_no_large_file_outside_shipped_policies_and_no_stray_run_checkpoint():
     files = [f for f in tracked if (ROOT / f).is_file() and not (ROOT / f).is_symlink()]
     large = [f"{f} ({(ROOT / f).stat().st_size / 1e6:.1f} MB)" for f in files
              if not f.startswith("assets/policies/") and (ROOT / f).stat().st_size > MAX_BYTES]
-    assert not large, "files over 5 MB outside assets/policies/ (ship them as a policy or leave them out):\n" + "\n".join(large)
+    assert not large, ("files over 5 MB outside assets/policies/ (ship them as a policy or leave them out):\n"
+                       + "\n".join(large))
     checkpoints = sorted(f for f in tracked if f.startswith("assets/runs/") and "/checkpoints/" in f)
     stray = sorted(set(checkpoints) - set(RUN_CHECKPOINTS))
     assert not stray, ("checkpoints under assets/runs/ (a checkpoint someone loads belongs in assets/policies/):\n"

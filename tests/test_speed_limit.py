@@ -200,7 +200,8 @@ def test_a_robot_standing_still_too_long_ends_its_training_episode_only(terrain)
     for _ in range(steps):
         assert not bool(env._task_failed(view, info))
         _, _, metrics, info = env._task_step(view, info, jnp.zeros(env.action_size))
-    assert int(info["stalled_steps"]) == steps and bool(env._task_failed(view, info)) and float(metrics["stalled_out"]) == 1
+    assert int(info["stalled_steps"]) == steps and bool(env._task_failed(view, info))
+    assert float(metrics["stalled_out"]) == 1
     moving, _ = _moving(env, 0.5)
     _, _, metrics, info = env._task_step(moving, info, jnp.zeros(env.action_size))
     assert int(info["stalled_steps"]) == 0 and float(metrics["stalled_out"]) == 0  # a step on the move starts it over
