@@ -53,10 +53,10 @@ def dynamics_quantities(model, robot) -> dict:
 
     def contact(geom):
         pair = pair_attributes(model, geom_like(geom), 1.0)
-        condim = int(pair["condim"])
-        used = {1: 0, 3: 0, 4: 1, 6: 3}[condim]  # torsional and rolling friction count only where condim uses them
-        return {k: tuple(float(v) for v in pair[k].split()) for k in ("condim", "solref", "solimp", "margin")} | \
-            {"friction": tuple(float(v) for v in pair["friction"].split()[2:2 + used])}
+        used = {1: 0, 3: 0, 4: 1, 6: 3}[pair["condim"]]  # torsional and rolling friction: only where condim uses them
+        floats = lambda v: tuple(float(x) for x in (v if isinstance(v, list) else [v]))
+        return {k: floats(pair[k]) for k in ("condim", "solref", "solimp", "margin")} | \
+            {"friction": floats(pair["friction"][2:2 + used])}
 
     joints = [model.joint(n) for n in robot.joint_names]
     actuators = [next(a for a in range(model.nu) if model.actuator_trnid[a, 0] == j.id) for j in joints]

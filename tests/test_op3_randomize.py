@@ -38,7 +38,7 @@ def test_the_ranges_contain_both_op3_models(name):
         values = getattr(model, field)[dofs]
         assert np.all((low <= values) & (values <= high)), f"{name} {field} {values} outside {OP3_COVERING[key]}"
     for foot in robot.feet_geoms:  # the feet's pairs with the floor, as the soccer scene makes them
-        solref = float(pair_attributes(model, foot, 1.0)["solref"].split()[0])
+        solref = pair_attributes(model, foot, 1.0)["solref"][0]
         low, high = OP3_COVERING["contact_timeconst"]
         assert low <= solref <= high, (name, foot, solref)
 

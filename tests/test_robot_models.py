@@ -112,17 +112,16 @@ def test_scene_pairs_make_the_contacts_of_mujocos_own_scene():
     c = touch[0]
     robot = robot_model(GO1, "menagerie", CTRL_DT)
     pair = pair_attributes(mujoco.MjModel.from_xml_path(str(robot.mjcf_path)), "FR", 0.7)
-    values = lambda text: np.array(text.split(), float)
-    assert int(pair["condim"]) == c.dim == 6
-    np.testing.assert_allclose(values(pair["solref"]), c.solref)
-    np.testing.assert_allclose(values(pair["solimp"]), c.solimp)
-    np.testing.assert_allclose(values(pair["friction"])[2:], c.friction[2:])
-    assert values(pair["friction"])[0] == 0.7
-    assert float(pair["margin"]) == pytest.approx(c.includemargin)
+    assert pair["condim"] == c.dim == 6
+    np.testing.assert_allclose(pair["solref"], c.solref)
+    np.testing.assert_allclose(pair["solimp"], c.solimp)
+    np.testing.assert_allclose(pair["friction"][2:], c.friction[2:])
+    assert pair["friction"][0] == 0.7
+    assert pair["margin"] == pytest.approx(c.includemargin)
     # the project's own feet keep the scene's plain contact: condim 3, MuJoCo's default solver parameters
     mine = pair_attributes(mujoco.MjModel.from_xml_path(str(GO1.mjcf_path)), "FR", 0.8)
-    assert mine["condim"] == "3" and float(mine["margin"]) == 0.0
-    np.testing.assert_allclose(values(mine["solimp"]), [0.9, 0.95, 0.001, 0.5, 2])
+    assert mine["condim"] == 3 and mine["margin"] == 0.0
+    np.testing.assert_allclose(mine["solimp"], [0.9, 0.95, 0.001, 0.5, 2])
 
 
 def test_step_for_divides_the_control_period():

@@ -160,11 +160,8 @@ def _pair(spec, geom1, geom2, friction, condim=3):
 def _robot_pair(spec, alone: mujoco.MjModel, prefix: str, geom: str, other: str, friction: float):
     """The pair of robot geom `prefix + geom` with a world geom: the contact MuJoCo gives the robot model's own geom
     against a plain one (legged.worlds.mjcf.pair_attributes), with sliding `friction`."""
-    a = pair_attributes(alone, geom, friction)
-    floats = lambda text: [float(x) for x in text.split()]
-    spec.add_pair(name=f"{prefix + geom}~{other}", geomname1=prefix + geom, geomname2=other, condim=int(a["condim"]),
-                  friction=floats(a["friction"]), solref=floats(a["solref"]), solimp=floats(a["solimp"]),
-                  margin=float(a["margin"]), gap=float(a["gap"]))
+    spec.add_pair(name=f"{prefix + geom}~{other}", geomname1=prefix + geom, geomname2=other,
+                  **pair_attributes(alone, geom, friction))
 
 
 def _add_contacts(spec: mujoco.MjSpec, config: SoccerSceneConfig, robot: RobotSpec, prefixes) -> None:

@@ -1,4 +1,5 @@
-"""Realise a terrain as MJCF: floor and ceiling height fields, the robot, and explicit contact pairs.
+"""Realise a terrain as a MuJoCo model (built with MjSpec): floor and ceiling height fields, the robot, and explicit
+contact pairs.
 
 The ceiling is a height field turned upside down (180 degrees about x), so both surfaces are exact
 copies of the height maps, triangulated the way MuJoCo triangulates every height field.
@@ -8,7 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -43,31 +44,24 @@ class SceneOptions:
     torsional and rolling friction, whose coefficients the randomisation can scale: RandomizationConfig.contact_spin)."""
 
 
-def _hfield_grid(heights: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """Normalised MuJoCo elevation data (rows along y) plus the height offset and range."""
+def _add_hfield(spec: mujoco.MjSpec, name, heights, centre, top_z, flipped, rgba, res, thickness=0.1):
+    """Add a height-field asset and geom; a flipped one hangs from `top_z` with `heights` as depths."""
     lo, hi = float(heights.min()), float(heights.max())
     rng = max(hi - lo, 1e-4)
-    # MuJoCo height fields have rows along y and columns along x; the `elevation` attribute lists
-    # rows from +y down to -y (image order), hence the flip.
-    return ((heights - lo) / rng).T[::-1], lo, rng
-
-
-def _add_hfield(asset, worldbody, name, heights, centre, top_z, flipped, rgba, res, thickness=0.1):
-    """Add a height-field asset and geom; a flipped one hangs from `top_z` with `heights` as depths."""
-    data, lo, rng = _hfield_grid(heights)
+    # MuJoCo height fields have rows along y (from -y up: MjSpec's order; MJCF's `elevation` text lists them from +y
+    # down) and columns along x; the maps are [x, y]
+    data = ((heights - lo) / rng).T
     nrow, ncol = data.shape
-    size = f"{(ncol - 1) * res / 2:.6f} {(nrow - 1) * res / 2:.6f} {rng:.6f} {thickness}"
-    ET.SubElement(asset, "hfield", name=name, nrow=str(nrow), ncol=str(ncol), size=size,
-                  elevation=" ".join(f"{v:.6f}" for v in data.ravel()))
-    attrs = dict(name=name, type="hfield", hfield=name, group=str(TERRAIN_GROUP), rgba=rgba,
-                 contype="0", conaffinity="0")
-    if flipped:
-        attrs.update(pos=f"{centre[0]:.6f} {centre[1]:.6f} {top_z - lo:.6f}", quat="0 1 0 0")
-    else:
-        attrs.update(pos=f"{centre[0]:.6f} {centre[1]:.6f} {lo:.6f}")
-    ET.SubElement(worldbody, "geom", **attrs)
+    spec.add_hfield(name=name, nrow=nrow, ncol=ncol, size=[(ncol - 1) * res / 2, (nrow - 1) * res / 2, rng, thickness],
+                    userdata=data.ravel().tolist())
+    pos = [centre[0], centre[1], top_z - lo if flipped else lo]
+    quat = [0, 1, 0, 0] if flipped else [1, 0, 0, 0]
+    spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname=name, group=TERRAIN_GROUP,
+                            rgba=rgba, contype=0, conaffinity=0, pos=pos, quat=quat)
 
 
+MINDIST = 1
+"""The contact sensor's reduction that keeps the deepest contacts (MJCF's reduce="mindist")."""
 CONTACT_SLOTS = 16
 """Contacts per watched geom that its contact sensor reports (the deepest ones): the sum of their normal
 forces is exact while a geom has at most this many (Go1 on the confined height fields: at most 7 seen)."""
@@ -89,53 +83,49 @@ def _mixed_with_floor(attrs: str) -> tuple:
 
 
 def pair_attributes(robot_model: mujoco.MjModel, geom: str | int, friction: float) -> dict:
-    """Attributes of the explicit contact pair of robot geom `geom` (name or id) with a floor or ceiling: the contact the robot
-    model's own geom makes with a plain floor (condim, solref, solimp, torsional and rolling friction, by MuJoCo's
-    mixing rules, its priority included; margin and gap the geom's), with the scene's sliding `friction`."""
+    """MjSpec.add_pair's attributes of the explicit contact pair of robot geom `geom` (name or id) with a floor or
+    ceiling: the contact the robot model's own geom makes with a plain floor (condim, solref, solimp, torsional and
+    rolling friction, by MuJoCo's mixing rules, its priority included; margin and gap the geom's), with the scene's
+    sliding `friction`."""
     g = robot_model.geom(geom)
     fmt = lambda v: " ".join(f"{x:.9g}" for x in np.ravel(v))
     attrs = (f'condim="{int(g.condim[0])}" friction="{fmt(g.friction)}" solref="{fmt(g.solref)}" '
              f'solimp="{fmt(g.solimp)}" solmix="{fmt(g.solmix)}" priority="{int(g.priority[0])}"')
     condim, mixed, solref, solimp = _mixed_with_floor(attrs)
-    return dict(condim=str(condim), friction=fmt((friction, friction) + mixed[2:]), solref=fmt(solref),
-                solimp=fmt(solimp), margin=fmt(g.margin), gap=fmt(g.gap))
+    return dict(condim=condim, friction=[friction, friction, *mixed[2:]], solref=list(solref), solimp=list(solimp),
+                margin=float(g.margin[0]), gap=float(g.gap[0]))
 
 
-def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions(),
-              contact_sensors: tuple[str, ...] = ()) -> str:
-    """Standalone MJCF text: the robot file with the terrain and contact pairs added, and a contact sensor
-    (forces of the CONTACT_SLOTS deepest contacts, each normal first) on every geom of `contact_sensors`."""
+def scene_spec(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions(),
+               contact_sensors: tuple[str, ...] = ()) -> mujoco.MjSpec:
+    """The robot's model with the terrain and contact pairs added, and a contact sensor (forces of the CONTACT_SLOTS
+    deepest contacts, each normal first) on every geom of `contact_sensors`; not compiled."""
     if not robot.mjcf_path.is_file():
         raise FileNotFoundError(f"robot model not found: {robot.mjcf_path} (reinstall the package assets)")
-    root = ET.parse(robot.mjcf_path).getroot()
-    root.set("model", f"{robot.name}_{'flat' if options.flat else 'confined'}")
-    asset = root.find("asset") if root.find("asset") is not None else ET.SubElement(root, "asset")
-    worldbody = root.find("worldbody")
-    ET.SubElement(asset, "texture", name="grid", type="2d", builtin="checker", width="256", height="256",
-                  rgb1="0.35 0.4 0.45", rgb2="0.3 0.35 0.4")
-    ET.SubElement(asset, "material", name="grid", texture="grid", texrepeat="8 8", texuniform="true")
-    ET.SubElement(worldbody, "light", name="sun", pos="0 0 6", dir="0 0 -1", directional="true")
+    spec = mujoco.MjSpec.from_file(str(robot.mjcf_path))
+    spec.modelname = f"{robot.name}_{'flat' if options.flat else 'confined'}"
+    spec.add_texture(name="grid", type=mujoco.mjtTexture.mjTEXTURE_2D, builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+                     width=256, height=256, rgb1=[0.35, 0.4, 0.45], rgb2=[0.3, 0.35, 0.4])
+    grid = spec.add_material(name="grid", texrepeat=[8, 8], texuniform=True)
+    grid.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "grid"
+    spec.worldbody.add_light(name="sun", pos=[0, 0, 6], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL)
     res = terrain.resolution
     centre = terrain.origin + res * (np.array(terrain.shape) - 1) / 2
     surfaces = [FLOOR_GEOM]
     if options.flat:
-        ET.SubElement(worldbody, "geom", name=FLOOR_GEOM, type="plane", size="0 0 0.05", material="grid",
-                      group=str(TERRAIN_GROUP), contype="0", conaffinity="0")
+        spec.worldbody.add_geom(name=FLOOR_GEOM, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], material="grid",
+                                group=TERRAIN_GROUP, contype=0, conaffinity=0)
     else:
         # MuJoCo 3.17's native convex collider gives a foot sphere on a height field contacts on the walls
         # between the field's triangular prisms (horizontal normals, 2 cm deep): the feet wedge and the robot
         # sinks. libccd gives the right, upward contacts (tests/test_physics_terrain.py checks it).
-        option = root.find("option") if root.find("option") is not None else ET.SubElement(root, "option")
-        flag = option.find("flag") if option.find("flag") is not None else ET.SubElement(option, "flag")
-        flag.set("nativeccd", "disable")
-        _add_hfield(asset, worldbody, FLOOR_GEOM, terrain.floor, centre, None, False, "0.55 0.5 0.45 1", res)
+        spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_NATIVECCD
+        _add_hfield(spec, FLOOR_GEOM, terrain.floor, centre, None, False, [0.55, 0.5, 0.45, 1], res)
         if options.ceiling:
             top = float(terrain.ceiling_top)
             depth = (top - terrain.ceiling)[:, ::-1]  # depth below `top`; 180 deg about x mirrors y
-            _add_hfield(asset, worldbody, CEILING_GEOM, depth, centre, top, True,
-                        f"0.45 0.55 0.7 {options.ceiling_alpha}", res)
+            _add_hfield(spec, CEILING_GEOM, depth, centre, top, True, [0.45, 0.55, 0.7, options.ceiling_alpha], res)
             surfaces.append(CEILING_GEOM)
-    contact = ET.SubElement(root, "contact")
     pairs = [(g, FLOOR_GEOM) for g in robot.feet_geoms]
     if options.collide_trunk:
         pairs += [(g, s) for g in robot.body_geoms for s in surfaces]
@@ -146,42 +136,42 @@ def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneO
     for geom, surface in pairs:
         attributes = pair_attributes(alone, geom, options.friction)
         if options.foot_condim is not None and geom in robot.feet_geoms and surface == FLOOR_GEOM:
-            attributes["condim"] = str(options.foot_condim)
-        ET.SubElement(contact, "pair", geom1=geom, geom2=surface, **attributes)
-    if contact_sensors:
-        sensor = root.find("sensor") if root.find("sensor") is not None else ET.SubElement(root, "sensor")
-        for geom in contact_sensors:
-            ET.SubElement(sensor, "contact", name=f"contact_{geom}", geom1=geom, data="force", reduce="mindist",
-                          num=str(CONTACT_SLOTS))
-    ET.indent(root)
-    return ET.tostring(root, encoding="unicode")
+            attributes["condim"] = options.foot_condim
+        spec.add_pair(geomname1=geom, geomname2=surface, **attributes)
+    force = 1 << int(mujoco.mjtConDataField.mjCONDATA_FORCE)  # data="force"
+    for geom in contact_sensors:  # intprm: the data fields, the reduction (1: the deepest first), the slots
+        spec.add_sensor(name=f"contact_{geom}", type=mujoco.mjtSensor.mjSENS_CONTACT, objtype=mujoco.mjtObj.mjOBJ_GEOM,
+                        objname=geom, intprm=[force, MINDIST, CONTACT_SLOTS])
+    return spec
+
+
+def scene_xml(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions(),
+              contact_sensors: tuple[str, ...] = ()) -> str:
+    """Standalone MJCF text of `scene_spec`."""
+    return scene_spec(terrain, robot, options, contact_sensors).to_xml()
 
 
 def compile_scene(terrain: Terrain, robot: RobotSpec, options: SceneOptions = SceneOptions(),
                   contact_sensors: tuple[str, ...] = ()) -> mujoco.MjModel:
     """Compiled MjModel of the scene (the one source of truth for MJX, native MuJoCo and viewers); the native
     engine's copy adds `contact_sensors` (read-outs only: the physics is the same)."""
-    return mujoco.MjModel.from_xml_string(scene_xml(terrain, robot, options, contact_sensors))
+    return scene_spec(terrain, robot, options, contact_sensors).compile()
 
 
 def write_world(world, robot: RobotSpec, out_dir) -> dict:
     """Write DIR/world.npz (the data) and DIR/world.xml (standalone MJCF with the robot at the start)."""
-    from pathlib import Path
-
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OSError(f"cannot create output directory {out}: {exc.strerror}") from exc
     npz = world.save(out / "world.npz")
-    xml = scene_xml(Terrain.from_worlds([world]), robot)
-    root = ET.fromstring(xml)
-    body = root.find(f".//body[@name='{robot.root_body}']")
-    body.set("pos", " ".join(f"{v:.4f}" for v in (*world.start[:2], world.start[2] + 0.02)))
-    for key in root.iter("key"):  # keyframes would teleport the robot back to the origin
-        key.set("qpos", " ".join(f"{v:.4f}" for v in (*world.start[:2], world.start[2] + 0.02))
-                + " " + " ".join(key.get("qpos").split()[3:]))
+    spec = scene_spec(Terrain.from_worlds([world]), robot)
+    start = [*world.start[:2], world.start[2] + 0.02]
+    spec.body(robot.root_body).pos = start
+    for key in spec.keys:  # keyframes would teleport the robot back to the origin
+        key.qpos = [*start, *list(key.qpos)[3:]]
     path = out / "world.xml"
-    path.write_text(ET.tostring(root, encoding="unicode"))
+    path.write_text(spec.to_xml())
     mujoco.MjModel.from_xml_path(str(path))  # fail here, not in the user's viewer
     return {"npz": str(npz), "xml": str(path)}
