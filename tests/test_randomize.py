@@ -37,16 +37,16 @@ def test_the_default_ranges_contain_every_reference_go1(name, model):
         values = getattr(model, field)[dofs]
         assert np.all((low <= values) & (values <= high)), f"{name} {field} {values} outside {COVERING[key]}"
     foot = pair_attributes(model, "FR", 1.0)
-    solref, margin = float(foot["solref"].split()[0]), float(foot["margin"])
+    solref, margin = foot["solref"][0], foot["margin"]
     assert COVERING["contact_timeconst"][0] <= solref <= COVERING["contact_timeconst"][1], (name, solref)
     assert COVERING["contact_margin"][0] <= margin <= COVERING["contact_margin"][1], (name, margin)
-    spin = 0.0 if foot["condim"] == "3" else 1.0  # condim 3 resists no spin or roll: scale 0 of the condim-6 terms
+    spin = 0.0 if foot["condim"] == 3 else 1.0  # condim 3 resists no spin or roll: scale 0 of the condim-6 terms
     assert COVERING["contact_spin"][0] <= spin <= COVERING["contact_spin"][1], (name, foot["condim"])
-    assert foot["condim"] in ("3", "6")
-    dmin = float(foot["solimp"].split()[0])  # softness 0 and 1 are the plain foot and Menagerie's soft one
+    assert foot["condim"] in (3, 6)
+    dmin = foot["solimp"][0]  # softness 0 and 1 are the plain foot and Menagerie's soft one
     assert min(MUJOCO_SOLIMP[0], SOFT_SOLIMP[0]) <= dmin <= max(MUJOCO_SOLIMP[0], SOFT_SOLIMP[0])
     if name == "menagerie":
-        np.testing.assert_allclose([float(v) for v in foot["solimp"].split()], SOFT_SOLIMP)
+        np.testing.assert_allclose(foot["solimp"], SOFT_SOLIMP)
 
 
 def test_draws_lie_in_their_ranges_and_the_latency_in_whole_steps():
@@ -192,3 +192,28 @@ def test_the_velocity_estimate_and_gyro_lead_the_walkers_state():
     plain = make("go1-flat")
     assert "lin_vel" not in [n for n, _ in plain.observation_layout()["state"]]
     assert env.observation_size["state"][0] == plain.observation_size["state"][0] + 6
+
+
+def test_a_latency_of_a_whole_control_period_delays_the_targets_by_one_step():
+    """Late all through a control step, the servos hold the previous step's targets for all of it; the step after
+    gets this step's (they must not hold the first controls for ever: the robot would stand still)."""
+    from legged.tasks import make
+
+    env = make("go1-flat")
+    view, info = env._spawned_view(jax.random.PRNGKey(7))
+    info["dr"] = dict(info["dr"], latency=jnp.int32(env.n_substeps))
+    state = env.start_episode(view, info, jax.random.PRNGKey(8))
+    first, second = jnp.full(env.action_size, 0.5), jnp.full(env.action_size, -0.5)
+    ctrl, _ = env.prepare(state, first)
+    assert ctrl.shape == (env.n_substeps, env.action_size)
+    np.testing.assert_allclose(ctrl, np.broadcast_to(env._servo_targets(state, jnp.zeros(env.action_size)), ctrl.shape))
+    later = state.replace(info=dict(state.info, last_action=first))  # what the first step's transition leaves
+    ctrl, _ = env.prepare(later, second)
+    held = np.asarray(env._servo_targets(later, first))
+    np.testing.assert_allclose(ctrl, np.broadcast_to(held, ctrl.shape))
+    assert not np.allclose(held, np.asarray(state.pipeline_state.ctrl), atol=1e-3)
+    # a latency shorter than the period: the controls in force (the previous targets) first, then this step's
+    part = state.replace(info=dict(state.info, dr=dict(state.info["dr"], latency=jnp.int32(1))))
+    ctrl, _ = env.prepare(part, second)
+    np.testing.assert_allclose(ctrl[0], state.pipeline_state.ctrl)
+    np.testing.assert_allclose(ctrl[1:], np.broadcast_to(env._servo_targets(part, second), ctrl[1:].shape))

@@ -267,15 +267,22 @@ class LeggedEnv(MjxEnv, abc.ABC):
 
     def prepare(self, state: State, action: jax.Array) -> tuple[jax.Array, jax.Array]:
         """Joint targets for the control step; with action latency, a schedule (n_substeps, nu) whose first
-        `latency` physics steps keep the previous targets."""
-        targets = self.joint_targets(action)
-        if self.config.motor_curve:
-            targets = self._within_motor_curve(state, targets)
+        `latency` physics steps keep the previous control step's targets."""
+        targets = self._servo_targets(state, action)
         latency = state.info["dr"].get("latency")
         if latency is None:
             return targets, action
+        # The controls in force are the previous step's targets, unless that step was late all through (a latency of
+        # a whole control period): then they never reached the servos, and are computed again from its action.
+        previous = jnp.where(latency >= self.n_substeps, self._servo_targets(state, state.info["last_action"]),
+                             state.pipeline_state.ctrl)
         late = jnp.arange(self.n_substeps)[:, None] < latency
-        return jnp.where(late, state.pipeline_state.ctrl, targets), action
+        return jnp.where(late, previous, targets), action
+
+    def _servo_targets(self, state: State, action: jax.Array) -> jax.Array:
+        """The joint targets of `action`, kept within the motors' torque-speed lines with `motor_curve`."""
+        targets = self.joint_targets(action)
+        return self._within_motor_curve(state, targets) if self.config.motor_curve else targets
 
     def _within_motor_curve(self, state: State, targets: jax.Array) -> jax.Array:
         """Joint targets whose PD torque, at the joint angles and velocities the control step starts from (with the

@@ -59,6 +59,11 @@ class SoccerEnv(MjxEnv):
             config = dataclasses.replace(config, sim_dt=robot.timestep)
         self.config, self.robot = config, robot
         self.n_substeps = config.n_substeps
+        latency = config.randomization.latency_s if config.randomization.enabled else None
+        if latency is not None and round(max(latency) / config.sim_dt) >= self.n_substeps:
+            raise ValueError(f"env.randomization.latency_s: at most {max(latency)} s is a whole control period "
+                             f"({config.ctrl_dt} s) at the model's {config.sim_dt} s physics step; the soccer envs "
+                             "hold the previous targets for part of a control step only: keep it below ctrl_dt")
         m = build_soccer_scene(config.scene, robot)
         m.opt.timestep = config.sim_dt
         self.mj_model = m
