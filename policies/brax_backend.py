@@ -154,6 +154,7 @@ def train_brax(env, config: TrainConfig, run: RunDir, resume: bool = False, prog
         if start_step >= config.timesteps:
             records = run.metrics()
             return records[-1] if records else {}
+        run.forget_after(start_step)  # a killed run logged past its checkpoint; those reports come again
     per_iteration = config.num_envs * ppo.num_steps_per_env
     per_report = per_iteration * config.checkpoint_every
     remaining = max(config.timesteps - start_step, per_iteration)

@@ -23,12 +23,17 @@ HELD_OUT_SEED_OFFSET = 1_000_003
 """Evaluation worlds use world_seed + this: never the worlds the policy trained on."""
 
 
+def whole_episodes(env_config, **changes):
+    """The confined env config with `changes` and no stall timeout: an evaluated or navigated episode runs to its
+    time limit (training ends a stalled one early as a failure)."""
+    return dataclasses.replace(env_config, stall_timeout_s=math.inf, **changes)
+
+
 def held_out(task: str, env_config):
     """The env config with held-out worlds (confined tasks) or terrain (rough ground: every level, no
     curriculum), and no time-limit change."""
     if task_entry(task).kind == "confined":  # whole episodes: a stalled robot is not cut short as in training
-        return dataclasses.replace(env_config, world_seed=env_config.world_seed + HELD_OUT_SEED_OFFSET,
-                                   stall_timeout_s=math.inf)
+        return whole_episodes(env_config, world_seed=env_config.world_seed + HELD_OUT_SEED_OFFSET)
     if hasattr(env_config, "terrain_seed"):
         return dataclasses.replace(env_config, terrain_seed=env_config.terrain_seed + HELD_OUT_SEED_OFFSET,
                                    curriculum=False)
@@ -179,8 +184,8 @@ def confined_eval_config(env_config, difficulty: int, episodes: int, world_seed:
     `world_seed`, by default the training seed + HELD_OUT_SEED_OFFSET), one episode per world, no curriculum, whole
     episodes (no stall timeout)."""
     seed = env_config.world_seed + HELD_OUT_SEED_OFFSET if world_seed is None else world_seed
-    return dataclasses.replace(env_config, world_seed=seed, num_worlds=episodes, difficulties=(difficulty,),
-                               curriculum=False, stall_timeout_s=math.inf)
+    return whole_episodes(env_config, world_seed=seed, num_worlds=episodes, difficulties=(difficulty,),
+                          curriculum=False)
 
 
 def one_tile_each(first: int, count: int, tiles: int) -> dict:

@@ -25,7 +25,7 @@ from legged.worlds.maps import HeightMaps
 from legged.worlds.terrain import Terrain
 from planners.body_check import BodyChecker
 from planners.body_planner import PlannerConfig, PlanningError, plan_path, replan
-from policies.evaluate import nominal_config, on_robot
+from policies.evaluate import nominal_config, on_robot, whole_episodes
 from policies.policy_io import actor_observation, load_policy
 from policies.run_dir import RunDir, RunDirError, check_policy
 
@@ -120,6 +120,12 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
     return report
 
 
+def episode_config(env_config, **changes):
+    """The follower's env config for one navigation episode in one scene, with `changes`: one world, no curriculum,
+    the robot facing +x, the whole episode (a stalled robot is replanned, not stopped)."""
+    return whole_episodes(env_config, num_worlds=1, curriculum=False, spawn_yaw=0.0, **changes)
+
+
 def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], physics: str = "native",
                    threads: int | None = None, config: NavigateConfig = NavigateConfig(),
                    planner: PlannerConfig = PlannerConfig(), on_step=None, robot: str = "project",
@@ -143,9 +149,7 @@ def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], phy
         raise NavigationError(str(exc)) from None  # a start or goal where the robot does not fit
     time_limit = time_limit_s if time_limit_s is not None else 20.0 + config.seconds_per_metre * first_plan.length_m
     limit = run_config.env.max_speed if max_speed is None else max_speed  # one limit, not a training draw
-    env_config = dataclasses.replace(run_config.env, num_worlds=1, curriculum=False, spawn_yaw=0.0,
-                                     episode_seconds=time_limit, max_speed=limit, speed_range=None,
-                                     stall_timeout_s=math.inf)  # a stalled robot is replanned, not stopped
+    env_config = episode_config(run_config.env, episode_seconds=time_limit, max_speed=limit, speed_range=None)
     env = ConfinedEnv(env_config, spec, terrain_of(maps, start, goal),
                       [first_plan.waypoints], path_capacity=PATH_CAPACITY, speeds=[plan_speeds(first_plan)])
     try:

@@ -9,6 +9,7 @@ machine. The Go1 MJX environment itself is checked in tests/test_envs.py and aga
 tests/test_mjx_vs_native.py; tests/fixtures/runs/go1-flat-brax-cpu2 is the Brax backend's Go1 run."""
 
 import dataclasses
+import json
 from pathlib import Path
 
 import jax
@@ -109,10 +110,14 @@ def test_brax_backend_tiny_run_resume_and_export(tmp_path, monkeypatch):
     monkeypatch.setattr(RunDir, "write_checkpoint", real_write)
     run = RunDir(run_dir)
     assert [p.name for p in run.checkpoints()] == ["step_000000000040.npz", "step_000000000080.npz"]
+    with run.metrics_path.open("a") as f:  # a report logged after the last checkpoint, before the kill
+        f.write(json.dumps({"step": 100, "episode_return": None, "episode_length": None}) + "\n")
     training.resume_run(str(run_dir), progress=False)
     assert run.checkpoints()[-1].name == "step_000000000120.npz"
     records = run.metrics()
     assert records[0]["step"] <= 80 and records[-1]["step"] == 120  # appended after the resume
+    steps = [r["step"] for r in records]
+    assert steps == sorted(set(steps)) and 100 not in steps  # the report past the checkpoint was dropped
     lengths = [r["episode_length"] for r in records if r["episode_length"] is not None]
     assert lengths and set(lengths) == {10.0}  # whole episodes (Brax's own auto-reset made them 1 step)
     assert all("episode_reward_position" in r for r in records if r["episode_length"] is not None)

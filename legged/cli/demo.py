@@ -5,7 +5,6 @@ and the shipped waypoint follower walking Go1 through it to the goal (native MuJ
 from __future__ import annotations
 
 import json
-import math
 import time
 
 from legged.cli.args import SEED, add_server_options, bounded, choices
@@ -67,19 +66,16 @@ def run_demo(out: str, seed: int, difficulty: int, policy_dir: str, view: dict |
 
 def _serve(world, plan, policy_dir: str, seed: int, view: dict, physics: str) -> None:
     """Serve the dashboard on the demo's world, rolling out the follower, until Ctrl-C."""
-    import dataclasses
-
     from legged.envs.confined import ConfinedEnv
     from legged.robots import GO1
     from legged.worlds import Terrain
-    from policies.navigate import load_follower, nominal_config
+    from policies.navigate import episode_config, load_follower, nominal_config
     from web.app import Dashboard, DashboardConfig
     from web.rollout import RecorderConfig
     from web.source import RolloutSource
 
     policy, config = load_follower(policy_dir)
-    env_config = dataclasses.replace(nominal_config(config.env), num_worlds=1, curriculum=False, spawn_yaw=0.0,
-                                     stall_timeout_s=math.inf)
+    env_config = episode_config(nominal_config(config.env))
     env = ConfinedEnv(env_config, GO1, Terrain.from_worlds([world]), [plan.waypoints])
     source = RolloutSource(env, f"{config.task} (demo world)", RecorderConfig(physics=physics), policy)
     dashboard = Dashboard(DashboardConfig(host=view["host"], port=view["port"], seed=seed,
