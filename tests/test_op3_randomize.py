@@ -202,3 +202,13 @@ def test_every_robot_is_pushed_at_the_push_steps():
         moved = np.asarray(pushed_view.qvel - view.qvel)[env.layout.root_dof_adr[:, None] + np.arange(2)]
         assert bool(pushed) == expect and (np.abs(moved).max() > 0) == expect
         assert np.abs(moved).max() <= OP3_RANDOMIZATION.push_velocity
+
+
+def test_options_the_soccer_envs_do_not_have_are_refused_by_name():
+    """A latency range reaching a whole control period, and the Go1's velocity estimate, are errors naming the field,
+    not settings that are silently ignored."""
+    too_late = dataclasses.replace(OP3_RANDOMIZATION, latency_s=(0.0, 0.025))
+    with pytest.raises(ValueError, match="env.randomization.latency_s"):
+        SoccerEnv(SoccerConfig(randomization=too_late))
+    with pytest.raises(ValueError, match="env.velocity_in_state"):
+        SoccerEnv(SoccerConfig(velocity_in_state=True))

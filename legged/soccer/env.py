@@ -59,6 +59,9 @@ class SoccerEnv(MjxEnv):
             config = dataclasses.replace(config, sim_dt=robot.timestep)
         self.config, self.robot = config, robot
         self.n_substeps = config.n_substeps
+        if config.velocity_in_state:
+            raise ValueError("env.velocity_in_state: the soccer and OP3 skill environments have no body-velocity "
+                             "estimate in their state (a Go1 task option)")
         latency = config.randomization.latency_s if config.randomization.enabled else None
         if latency is not None and round(max(latency) / config.sim_dt) >= self.n_substeps:
             raise ValueError(f"env.randomization.latency_s: at most {max(latency)} s is a whole control period "
