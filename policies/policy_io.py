@@ -252,4 +252,5 @@ def load_walker(run_dir: str | Path, getup: str | Path = "", prior: str = ""):
     return Walker(policy=snapshot_rsl_actor(policy.torch_module), net=OpponentNet(config.ppo.activation), **skill,
                   command_low=tuple(config.env.command_low), command_high=tuple(config.env.command_high),
                   gait=load_gait_table(), dt=float(config.env.ctrl_dt), residual=bool(config.env.residual),
+                  velocity_input=bool(config.env.velocity_in_state),
                   default_pose=tuple(float(q) for q in OP3.default_pose), action_scale=float(OP3.action_scale))

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import jax
 import numpy as np
+import psutil
 import torch
 from rsl_rl.algorithms import PPO, Distillation
 from torch.utils.tensorboard import SummaryWriter
@@ -90,6 +91,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         run.forget_after(step)
     earlier = run.metrics() if resume else []
     wall0 = time.perf_counter() - ((earlier[-1].get("wall_s") or 0.0) if earlier else 0.0)  # resumed runs go on
+    startup = {"startup_s": process_seconds()}  # this process's start-up, on its first record
     clock = time.perf_counter
     saving = 0.0  # seconds the last iteration's record and checkpoint took to write
     try:
@@ -137,7 +139,9 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                       "learning_rate": alg.learning_rate,
                       "action_std": float(alg.get_policy().output_std.detach().mean()),
                       **{f"loss_{k}": float(v) for k, v in losses.items() if k != "symmetry"}, **diagnostics,
-                      **timing, **hooks.record(venv), **({} if spread is None else {"process_spread": spread})}
+                      **timing, **hooks.record(venv), **({} if spread is None else {"process_spread": spread}),
+                      **startup}
+            startup = {}
             bar.update(per_iteration)
             bar.set_postfix(ret=_short(record["episode_return"]), sps=f"{record['steps_per_s']:.0f}")
             if diverged:
@@ -229,6 +233,11 @@ def non_finite(losses: dict, alg) -> str:
         if not all(bool(torch.isfinite(p).all()) for p in net.parameters()):
             bad.append(f"{name} parameters not finite")
     return ", ".join(bad)
+
+
+def process_seconds() -> float:
+    """Seconds since this process started (imports, environment build and compilation so far)."""
+    return time.time() - psutil.Process().create_time()
 
 
 def _short(value) -> str:

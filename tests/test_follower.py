@@ -17,6 +17,7 @@ from policies.config import PPOConfig
 from policies.evaluate import confined_eval_config, one_tile_each, wilson_interval
 from policies.rsl_backend import build_ppo, dummy_observations
 from policies.warm_start import element_names, input_map, warm_start
+from tests.warm_support import saved_actor, warm_started
 
 WALKER = Path(__file__).resolve().parents[1] / "assets" / "policies" / "go1-flat-walker-v1"
 
@@ -147,18 +148,10 @@ def test_warm_start_into_a_state_with_past_steps_acts_as_the_walker():
     env = make("go1-flat", past_steps=3)
     names = element_names(env.observation_layout()["state"])
     assert sum(n.startswith("past_") for n in names) == 3 * 3 * 12
-    sizes = env.observation_dims()
-    rng = np.random.default_rng(1)
-    obs = dummy_observations(sizes, 32)
-    for key in obs.keys():
-        obs[key] = torch.as_tensor(rng.normal(size=obs[key].shape), dtype=torch.float32)
     ppo = PPOConfig(actor_hidden=(128, 128, 128), critic_hidden=(128, 128, 128))
-    new = build_ppo(obs, 32, 12, ppo, "cpu")
-    note = warm_start(new, WALKER, env, obs, "go1-flat")
-    assert f"state: 42 of {sizes['state']}" in note, note
-    walker = build_ppo(dummy_observations(make("go1-flat").observation_dims(), 32), 32, 12, ppo, "cpu")
-    payload = torch.load(sorted((WALKER / "checkpoints").glob("*.pt"))[-1], weights_only=True)
-    walker.actor.load_state_dict(payload["alg"]["actor_state_dict"])
+    new, obs, note = warm_started(WALKER, env, "go1-flat", 12, ppo, seed=1)
+    assert f"state: 42 of {env.observation_dims()['state']}" in note, note
+    walker = saved_actor(WALKER, make("go1-flat").observation_dims(), 12, ppo)
     walker_obs = obs.clone()
     walker_obs["state"] = obs["state"][:, [i for i, n in enumerate(names) if not n.startswith("past_")]]
     with torch.no_grad():

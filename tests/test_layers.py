@@ -184,7 +184,7 @@ POLICIES_ORDER = [
     ("orchestration", ("policies.training", "policies.distill", "policies.evaluate", "policies.eval_report",
                        "policies.soccer.drill", "policies.navigate", "policies.nav_bench", "policies.export",
                        "policies.convert", "policies.average", "policies.tables", "policies.plots",
-                       "policies.bench_encoder", "policies.bench_train")),
+                       "policies.bench_encoder", "policies.bench_train", "policies.learning_curve")),
 ]
 """The groups of `policies`, lowest first, as LEGGED_ORDER: run files (config I/O, configs, the soccer section of
 the config, run directories, the process launch) < checkpoints (the data-only formats) < models (networks, the HIB
@@ -242,8 +242,8 @@ def test_the_groups_place_modules_by_their_most_specific_entry():
         [0, 2, 4, 6]
 
 
-LAZY_IMPORTS = 89
-"""Import statements inside functions that import a project module, today: the command line's (legged.cli, 58:
+LAZY_IMPORTS = 91
+"""Import statements inside functions that import a project module, today: the command line's (legged.cli, 60:
 each command imports what it runs) and the dashboard's checks' (web.source), which answer before torch and the
 task registry load; the registry's soccer environments (legged.tasks), loaded when a soccer task is built; Brax's
 trainer (policies.training), loaded by Brax runs only; the placo solver and JAX in the gait table's open-loop

@@ -195,8 +195,9 @@ def test_the_velocity_estimate_and_gyro_lead_the_walkers_state():
 
 
 def test_a_latency_of_a_whole_control_period_delays_the_targets_by_one_step():
-    """Late all through a control step, the servos hold the previous step's targets for all of it; the step after
-    gets this step's (they must not hold the first controls for ever: the robot would stand still)."""
+    """One rule for every latency: the first `latency` physics steps hold the previous action's targets, the rest
+    this action's. Late all through a control step, the servos hold the previous step's targets for all of it and
+    the step after gets this step's (they must not hold the first controls for ever: the robot would stand still)."""
     from legged.tasks import make
 
     env = make("go1-flat")
@@ -212,8 +213,17 @@ def test_a_latency_of_a_whole_control_period_delays_the_targets_by_one_step():
     held = np.asarray(env._servo_targets(later, first))
     np.testing.assert_allclose(ctrl, np.broadcast_to(held, ctrl.shape))
     assert not np.allclose(held, np.asarray(state.pipeline_state.ctrl), atol=1e-3)
-    # a latency shorter than the period: the controls in force (the previous targets) first, then this step's
-    part = state.replace(info=dict(state.info, dr=dict(state.info["dr"], latency=jnp.int32(1))))
-    ctrl, _ = env.prepare(part, second)
-    np.testing.assert_allclose(ctrl[0], state.pipeline_state.ctrl)
-    np.testing.assert_allclose(ctrl[1:], np.broadcast_to(env._servo_targets(part, second), ctrl[1:].shape))
+    now = np.asarray(env._servo_targets(later, second))
+    for late in range(env.n_substeps):  # shorter than the period: the previous targets first, then this step's
+        part = later.replace(info=dict(later.info, dr=dict(later.info["dr"], latency=jnp.int32(late))))
+        ctrl, _ = env.prepare(part, second)
+        np.testing.assert_allclose(ctrl[:late], np.broadcast_to(held, (late, env.action_size)))
+        np.testing.assert_allclose(ctrl[late:], np.broadcast_to(now, (env.n_substeps - late, env.action_size)))
+
+
+def test_a_latency_range_beyond_one_control_period_is_refused():
+    from legged.tasks import make
+
+    late = dataclasses.replace(GO1_RANDOMIZATION, latency_s=(0.0, 0.03))
+    with pytest.raises(ValueError, match="env.randomization.latency_s: 0.03 s is more than one control period"):
+        make("go1-flat", randomization=late)

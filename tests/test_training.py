@@ -141,8 +141,8 @@ def test_native_training_is_reproducible(tiny_env, tmp_path, monkeypatch):
         with torch_threads_kept():
             training.start_run("go1-flat", str(tmp_path / name), num_envs=BATCH, timesteps=80, overrides=TINY,
                                progress=False, physics="native", threads=1)
-        runs.append([{k: v for k, v in r.items() if k not in ("steps_per_s", "wall_s") and not k.startswith("time_")}
-                     for r in RunDir(tmp_path / name).metrics()])
+        runs.append([{k: v for k, v in r.items() if k not in ("steps_per_s", "wall_s", "startup_s")
+                      and not k.startswith("time_")} for r in RunDir(tmp_path / name).metrics()])
     assert runs[0] == runs[1] and len(runs[0]) == 2
     assert RunDir(tmp_path / "a").load_config().physics == "native"
 
@@ -300,6 +300,32 @@ def test_plot_overlays_runs_one_colour_each(trained_run, tmp_path, capsys):
     assert COLOURS[0] in pixels and COLOURS[1] in pixels and COLOURS[2] not in pixels  # a line (and label) per run
     assert main(["plot", str(run_dir), str(shutil.copytree(run_dir, tmp_path / "x" / run_dir.name))]) == 2
     assert "share a folder name" in capsys.readouterr().err
+
+
+def test_a_learning_curve_plots_held_out_figures_against_time_from_process_start(trained_run, tmp_path, capsys):
+    """`legged curve`: each checkpoint evaluated on the same held-out episodes, placed at the seconds from its
+    training process's start (every process's first record holds its start-up: imports, build, compilation)."""
+    import json
+
+    from legged.cli import main
+    from policies.learning_curve import saved_at
+
+    run_dir = trained_run[0]
+    records = RunDir(run_dir).metrics()  # step 40 by the first process, 80 (again) and 120 by the resumed one
+    assert records[0]["startup_s"] > 0 and records[1]["startup_s"] > 0 and "startup_s" not in records[2]
+    times = saved_at(RunDir(run_dir))
+    assert times[40] == pytest.approx(records[0]["startup_s"] + records[0]["wall_s"])
+    assert times[120] == pytest.approx(records[0]["startup_s"] + records[1]["startup_s"] + records[2]["wall_s"])
+    out = tmp_path / "curve.png"
+    assert main(["curve", str(run_dir), "--every", "2", "--episodes", "2", "--num-envs", "2", "--physics", "native",
+                 "--threads", "1", "--out", str(out), "--json", "--quiet"]) == 0  # checkpoints 120 and 40
+    report = json.loads(capsys.readouterr().out)
+    points = report["curves"][0]["points"]
+    assert [p["step"] for p in points] == [40, 120] and points[0]["wall_s"] < points[1]["wall_s"]
+    assert all(p["tracking_error_mps"] >= 0 and p["fall_rate"] == 0.0 for p in points)
+    assert out.stat().st_size > 1000 and report["plot"] == str(out)
+    assert main(["curve", str(tmp_path), "--episodes", "2"]) == 2  # nothing to evaluate: one line
+    assert "has no checkpoint to evaluate" in capsys.readouterr().err
 
 
 def test_table_puts_saved_evaluations_side_by_side(tmp_path, capsys):

@@ -386,3 +386,77 @@ def test_a_shipped_piloted_vision_player_brings_its_pilot_to_games_and_drills():
     starts = [np.asarray(VectorEnv.of(env, 2, "native", 1).reset(key).state.obs["privileged_state"])
               for env in (game, truth)]
     np.testing.assert_array_equal(starts[0], starts[1])
+
+
+def test_a_walker_that_reads_a_velocity_estimate_gets_the_games_own():
+    """With env.velocity_in_state the walk skill's state ends with the torso's velocity in its own frame as a state
+    estimator gives it (the truth within the noise); a walker trained on it reads the game's estimate of each robot,
+    and a game that keeps none is refused in one line naming the field."""
+    from legged.soccer.observe import local_velocity, read_bodies
+
+    env = make("op3-walk", residual=False, velocity_in_state=True)
+    layout = env.observation_layout()
+    assert layout["state"][-1] == ("lin_vel", 3)
+    batch, walker_state = _walk_state(env, 7)
+    state = np.asarray(batch.state.obs["state"])
+    for group, parts in layout.items():
+        assert batch.state.obs[group].shape[-1] == sum(n for _, n in parts), group
+    data = batch.state.pipeline_state
+    truth = np.stack([np.asarray(local_velocity(read_bodies(env.game.layout, data.qpos[i], data.qvel[i])))[0]
+                      for i in range(2)])
+    error = state[:, -3:] - truth
+    assert np.abs(error).max() <= env.config.noise.lin_vel + 1e-6 and np.abs(error).max() > 0
+    assert np.abs(truth).max() > 0.01  # the robots move: the estimate is not a constant
+    command = np.asarray(jax.vmap(env.command)(batch.state.info))
+    identity = dataclasses.replace(_walker([(np.eye(state.shape[1], dtype=np.float32),
+                                             np.zeros(state.shape[1], np.float32))]), velocity_input=True)
+    estimate = batch.state.info["velocity_estimate"][:, 0]
+    rebuilt = identity.actions(jnp.asarray(state[:, :PROPRIO_SIZE]), jnp.asarray(_action_of(command)), walker_state,
+                               estimate)
+    np.testing.assert_allclose(np.asarray(rebuilt), state, atol=1e-5)
+    with pytest.raises(ValueError, match="env.velocity_in_state"):
+        identity.actions(jnp.asarray(state[:, :PROPRIO_SIZE]), jnp.asarray(_action_of(command)), walker_state)
+
+    size = PROPRIO_SIZE + 11
+    w = np.zeros((size, 20), np.float32)
+    w[size - 3, 0] = 1.0  # joint 0 <- the estimated forward velocity
+    walker = dataclasses.replace(_walker([(w, np.zeros(20, np.float32))]), velocity_input=True)
+    with pytest.raises(ValueError, match="set env.velocity_in_state=true"):
+        LearnerView(make("soccer-1v1"), walker=walker)
+    view = LearnerView(make("soccer-1v1", velocity_in_state=True), walker=walker)
+    vector = VectorEnv.of(view, 2, "native", 1)
+    batch = vector.reset(jax.random.PRNGKey(0))
+    moving = batch.state.info["velocity_estimate"] + jnp.array([0.3, 0.0, 0.0])
+    batch = dataclasses.replace(batch, state=batch.state.replace(info=dict(batch.state.info, velocity_estimate=moving)))
+    features = view.game.policy_state_size  # a network opponent walks through the walker too
+    opponent = network_opponent(np.zeros(features), np.ones(features),
+                                [(np.zeros((features, 3), np.float32), np.zeros(3, np.float32))])
+    batch, _ = vector.step(batch, jnp.zeros((2, 3)), opponent)
+    joints = np.asarray(batch.state.info["last_action"])[:, :, 0]  # [env, robot]: both robots read their estimate
+    np.testing.assert_allclose(joints, np.asarray(moving)[:, :, 0], atol=1e-6)
+    with pytest.raises(ValueError, match="op3-getup does not read a velocity estimate"):
+        make("op3-getup", velocity_in_state=True)
+
+
+def test_a_walker_warm_started_with_a_velocity_estimate_first_walks_as_before():
+    """op3-walk with env.velocity_in_state from the shipped walker trained without it: its inputs are mapped by name
+    (SkillEnv.observation_layout), the estimate starts at zero weight, so the first policy is the walker's."""
+    from pathlib import Path
+
+    import torch
+
+    from policies.config import PPOConfig
+    from tests.warm_support import saved_actor, warm_started
+
+    source = Path(__file__).resolve().parents[1] / "assets" / "policies" / "op3-walker-v1"
+    env = make("op3-walk", velocity_in_state=True)
+    ppo = PPOConfig(actor_hidden=(512, 256, 128), critic_hidden=(512, 256, 128))
+    new, obs, note = warm_started(source, env, "op3-walk", 20, ppo, seed=2)
+    size = env.observation_dims()["state"]
+    assert f"state: {size - 3} of {size}" in note, note
+    walker = saved_actor(source, make("op3-walk").observation_dims(), 20, ppo)
+    old = obs.clone()
+    old["state"] = obs["state"][:, :-3]
+    with torch.no_grad():
+        assert torch.allclose(new.actor(obs, stochastic_output=False), walker.actor(old, stochastic_output=False),
+                              atol=1e-5)

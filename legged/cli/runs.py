@@ -1,9 +1,12 @@
-"""The command line's commands on run directories: `legged convert-checkpoints` and `legged average`."""
+"""The command line's commands on run directories: `legged convert-checkpoints`, `legged average` and `legged
+curve`."""
 
 from __future__ import annotations
 
 import argparse
 import json
+
+from legged.cli.args import SEED, add_physics_options, bounded
 
 
 def cmd_convert(args) -> int:
@@ -27,6 +30,29 @@ def cmd_average(args) -> int:
     return 0
 
 
+def cmd_curve(args) -> int:
+    """`legged curve`: runs' checkpoints evaluated on held-out episodes against wall time, a PNG and JSON."""
+    from policies.eval_report import EvalRequest
+    from policies.learning_curve import learning_curve, plot_curves
+
+    curves = []
+    for run_dir in args.run_dir:
+        request = EvalRequest(run_dir=run_dir, episodes=args.episodes, seed=args.seed, physics=args.physics,
+                              threads=args.threads or None, num_envs=args.num_envs, nominal=args.nominal,
+                              progress=not args.quiet)
+        curves.append(learning_curve(request, args.every))
+    out = args.out or f"{args.run_dir[0].rstrip('/')}/curve_{args.figure}.png"
+    path = plot_curves(curves, args.figure, out, args.goal)
+    if args.json:
+        print(json.dumps({"plot": str(path), "curves": curves}))
+    else:
+        for curve in curves:
+            print(f"[curve] {curve['run']}: " + ", ".join(
+                f"{p['wall_s'] / 60:.1f} min {p.get(args.figure)}" for p in curve["points"]))
+        print(f"[curve] wrote {path}")
+    return 0
+
+
 def _weights(text: str) -> list[float]:
     """Parser of comma-separated checkpoint weights (for argparse `type=`)."""
     try:
@@ -36,7 +62,7 @@ def _weights(text: str) -> list[float]:
 
 
 def add_run_commands(sub) -> None:
-    """Register `convert-checkpoints` and `average`."""
+    """Register `convert-checkpoints`, `average` and `curve`."""
     cv = sub.add_parser("convert-checkpoints", help="rewrite a run's old pickled checkpoints as data-only files")
     cv.add_argument("run_dir")
     cv.add_argument("--trust-pickles", action="store_true",
@@ -53,3 +79,21 @@ def add_run_commands(sub) -> None:
                     help="comma-separated positive weights, one per source (default: equal)")
     av.add_argument("--json", action="store_true", help="one-line JSON")
     av.set_defaults(fn=cmd_average)
+
+    cu = sub.add_parser("curve", help="a held-out learning curve: every Nth checkpoint of runs evaluated on the same "
+                                      "episodes, against minutes from the training process's start (PNG, JSON)")
+    cu.add_argument("run_dir", nargs="+", help="one run directory, or several to compare")
+    cu.add_argument("--every", type=bounded(int, 1, 10**6), default=1,
+                    help="evaluate every Nth checkpoint, counted back from the newest (default: all)")
+    cu.add_argument("--episodes", type=bounded(int, 1, 100000), default=50)
+    cu.add_argument("--seed", type=SEED, default=12345, help="seed of the evaluation episodes")
+    add_physics_options(cu, default="native")
+    cu.add_argument("--num-envs", type=bounded(int, 1, 4096), default=None, help="episodes run side by side")
+    cu.add_argument("--nominal", action="store_true", help="domain randomisation and observation noise off")
+    cu.add_argument("--figure", default="tracking_error_mps",
+                    help="the evaluation figure plotted (tracking_error_mps, fall_rate, episode_return, ...)")
+    cu.add_argument("--goal", type=float, default=None, help="draw a dashed goal line at this value")
+    cu.add_argument("--out", default=None, help="PNG file (default: the first RUN_DIR/curve_<figure>.png)")
+    cu.add_argument("--json", action="store_true", help="one-line JSON: the plot and every point")
+    cu.add_argument("--quiet", action="store_true", help="no progress bars")
+    cu.set_defaults(fn=cmd_curve)

@@ -26,7 +26,7 @@ from legged.envs.physics import PhysicsView, Spawn
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
 from legged.envs.motor import motor_limits, servo_gains, within_motor_curve
 from legged.envs.rewards import penalty_terms
-from legged.envs.randomize import MODEL_DR, draw, randomized_fields
+from legged.envs.randomize import MODEL_DR, check_latency, draw, late_controls, randomized_fields
 from legged.robots.models import mjx_model_of, robot_model
 from legged.robots.spec import RobotSpec
 from legged.sensors.heightscan import surface_height
@@ -51,6 +51,8 @@ class LeggedEnv(MjxEnv, abc.ABC):
             config = dataclasses.replace(config, sim_dt=robot.timestep)
         if config.randomization.enabled and config.randomization.contact_spin is not None:
             scene = dataclasses.replace(scene, foot_condim=6)  # spin and roll friction drawn on condim-6 feet
+        if config.randomization.enabled:
+            check_latency(config.randomization.latency_s, config.sim_dt, config.ctrl_dt)
         self.robot, self.terrain, self.config, self.scene = robot, terrain, config, scene
         self.n_substeps = config.n_substeps
         self.mj_model = compile_scene(terrain, robot, scene)
@@ -267,17 +269,14 @@ class LeggedEnv(MjxEnv, abc.ABC):
 
     def prepare(self, state: State, action: jax.Array) -> tuple[jax.Array, jax.Array]:
         """Joint targets for the control step; with action latency, a schedule (n_substeps, nu) whose first
-        `latency` physics steps keep the previous control step's targets."""
+        `latency` physics steps keep the previous control step's targets (legged.envs.randomize.late_controls)."""
         targets = self._servo_targets(state, action)
         latency = state.info["dr"].get("latency")
         if latency is None:
             return targets, action
-        # The controls in force are the previous step's targets, unless that step was late all through (a latency of
-        # a whole control period): then they never reached the servos, and are computed again from its action.
-        previous = jnp.where(latency >= self.n_substeps, self._servo_targets(state, state.info["last_action"]),
-                             state.pipeline_state.ctrl)
-        late = jnp.arange(self.n_substeps)[:, None] < latency
-        return jnp.where(late, previous, targets), action
+        # the previous step's action, within the motors' torque-speed lines at the joints' state now
+        previous = self._servo_targets(state, state.info["last_action"])
+        return late_controls(previous, targets, latency, self.n_substeps), action
 
     def _servo_targets(self, state: State, action: jax.Array) -> jax.Array:
         """The joint targets of `action`, kept within the motors' torque-speed lines with `motor_curve`."""

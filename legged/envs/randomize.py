@@ -71,6 +71,21 @@ def draw_model(c, rng: jax.Array, nu: int, sim_dt: float, n_substeps: int) -> di
     return dr
 
 
+def late_controls(previous, targets, latency, n_substeps: int):
+    """One control step's controls under action latency, a schedule (n_substeps, nu): the previous step's targets for
+    the first `latency` physics steps (a scalar, or one per actuator), this step's after. The one rule of every
+    environment: a latency of a whole control period delays each action by exactly one step."""
+    return jnp.where(jnp.arange(n_substeps)[:, None] < latency, previous, targets)
+
+
+def check_latency(latency_s, sim_dt: float, ctrl_dt: float) -> None:
+    """A latency range longer than one control period is an error naming the field (the draws would be clipped to
+    one period without a word)."""
+    if latency_s is not None and round(max(latency_s) / sim_dt) > round(ctrl_dt / sim_dt):
+        raise ValueError(f"env.randomization.latency_s: {max(latency_s)} s is more than one control period "
+                         f"({ctrl_dt} s); action latency is modelled up to one period (a one-step delay)")
+
+
 def randomized_fields(base: dict, dr: dict, trunk: int, xp=jnp) -> dict:
     """Model fields after applying randomisation parameters `dr` to the nominal fields `base`.
 

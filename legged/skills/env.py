@@ -30,7 +30,7 @@ from legged.skills.config import LEG_JOINTS, GetUpConfig, WalkSkillConfig
 from legged.soccer.drills import DrillConfig, DrillEnv
 from legged.soccer.getup_motion import getup_motion, lies_on_back, motion_features, motion_targets
 from legged.soccer.learner import LEARNER
-from legged.soccer.observe import PROPRIO_SIZE, Bodies, read_bodies
+from legged.soccer.observe import PROPRIO_SIZE, Bodies, local_velocity, read_bodies
 from legged.soccer.placo.gait_table import advance_phase, filter_command, gait_targets
 from legged.soccer.placo.player import actions_of
 
@@ -59,7 +59,7 @@ class SkillEnv(DrillEnv, abc.ABC):
                      torques=penalties.torques * jnp.sum(jnp.square(force)))
         own, privileged = self._features(info, b)
         game_obs = info["game_obs"]
-        local_vel = b.rot[LEARNER].T @ b.vel[LEARNER]
+        local_vel = local_velocity(b)[LEARNER]
         obs = {"state": jnp.concatenate([game_obs["state"][LEARNER, :PROPRIO_SIZE], own]),
                "privileged_state": jnp.concatenate([game_obs["privileged_state"][LEARNER, :PROPRIO_SIZE], own,
                                                     local_vel, b.pos[LEARNER, 2:], b.up_z[LEARNER, None],
@@ -69,7 +69,18 @@ class SkillEnv(DrillEnv, abc.ABC):
         reward = jnp.where(game.metrics["diverged"] > 0, 0.0, sum(terms.values())).astype(jnp.float32)
         return mine.replace(obs=obs, reward=reward, metrics=metrics)
 
+    def observation_layout(self) -> dict:
+        """Named slices of `state` and `privileged_state` (warm starts map a skill's inputs by them)."""
+        own = self._feature_layout()
+        privileged = [("base_lin_vel", 3), ("height", 1), ("up_z", 1), ("reference", self.action_size)]
+        return {"state": [("proprio", PROPRIO_SIZE)] + own,
+                "privileged_state": [("proprio", PROPRIO_SIZE)] + own + privileged}
+
     # ----------------------------------------------------------------- what a skill defines
+    @abc.abstractmethod
+    def _feature_layout(self) -> list[tuple[str, int]]:
+        """Named slices of what the policy reads after its proprioception (`_features`' first part)."""
+
     def _skill_info(self) -> dict:
         """The skill's own entries of `info` at an episode's start."""
         return {}
@@ -95,7 +106,8 @@ class WalkSkillEnv(SkillEnv):
     """op3-walk: one OP3 tracking random velocity commands with the placo gait as its reference.
 
     Observations: `state` = proprioception (66), command (3), the command low-pass filtered as the reference
-    reads it (3), gait clock (sin, cos of 2 pi phase);
+    reads it (3), gait clock (sin, cos of 2 pi phase), with `velocity_in_state` the torso's velocity in its own
+    frame as a state estimator gives it (3, noisy: the game's `info['velocity_estimate']`);
     `privileged_state` = the same clean, torso velocity in the torso frame (3), height, uprightness and the
     reference's 20 servo targets."""
 
@@ -141,10 +153,16 @@ class WalkSkillEnv(SkillEnv):
             "fall": w.fall * (metrics["fell"] > 0),
         }
 
+    def _feature_layout(self) -> list[tuple[str, int]]:
+        return [("command", 3), ("gait_command", 3), ("clock", 2)] + \
+            ([("lin_vel", 3)] if self.config.velocity_in_state else [])
+
     def _features(self, info: dict, b: Bodies) -> tuple[jnp.ndarray, jnp.ndarray]:
         clock = 2 * jnp.pi * info["gait_phase"]
-        own = jnp.concatenate([self.command(info), info["gait_command"], jnp.stack([jnp.sin(clock), jnp.cos(clock)])])
-        return own, self.reference(info)
+        own = [self.command(info), info["gait_command"], jnp.stack([jnp.sin(clock), jnp.cos(clock)])]
+        if self.config.velocity_in_state:
+            own.append(info["velocity_estimate"][LEARNER])
+        return jnp.concatenate(own), self.reference(info)
 
     def _metrics(self, info: dict, b: Bodies) -> dict:
         return {"imitation_rms_rad": jnp.sqrt(self._pose_error(info, b))}
@@ -158,6 +176,8 @@ class GetUpSkillEnv(SkillEnv):
     height, uprightness and the reference's 20 servo targets."""
 
     def __init__(self, config: GetUpConfig = GetUpConfig()):
+        if config.velocity_in_state:
+            raise ValueError("env.velocity_in_state: op3-getup does not read a velocity estimate (an op3-walk option)")
         super().__init__(DrillConfig(name="getup", getup_seconds=config.episode_seconds), config)
         self._default = jnp.asarray(self.robot.default_pose, jnp.float32)
         self.motion = getup_motion()
@@ -184,6 +204,9 @@ class GetUpSkillEnv(SkillEnv):
 
     def _advance(self, info: dict) -> dict:
         return dict(info, getup_time=info["getup_time"] + self.dt)
+
+    def _feature_layout(self) -> list[tuple[str, int]]:
+        return [("getup", 2)]
 
     def _features(self, info: dict, b: Bodies) -> tuple[jnp.ndarray, jnp.ndarray]:
         return motion_features(self.motion, info["getup_back"], info["getup_time"]), self.reference(info)

@@ -157,7 +157,9 @@ class SoccerRewards:
 
 @dataclasses.dataclass(frozen=True)
 class SoccerConfig(EnvConfig):
-    """A soccer game of OP3 teams (1v1 or 2v2) on the scene of `scene`."""
+    """A soccer game of OP3 teams (1v1 or 2v2) on the scene of `scene`. With `velocity_in_state` the game keeps each
+    robot's torso velocity as a state estimator gives it (`info['velocity_estimate']`, noise `noise.lin_vel`) for
+    walkers that read it: op3-walk's state then ends with it; the soccer players' own inputs stay as they are."""
 
     ctrl_dt: float = OP3_CTRL_DT
     """Policy period, seconds (40 Hz; 5 physics steps)."""

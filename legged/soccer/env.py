@@ -30,7 +30,7 @@ from mujoco import mjx
 from legged.envs.api import MjxEnv
 from legged.envs.motor import motor_limits, servo_gains, within_motor_curve
 from legged.envs.physics import PhysicsView, Spawn
-from legged.envs.randomize import MODEL_DR
+from legged.envs.randomize import MODEL_DR, check_latency, late_controls
 from legged.robots.models import mjx_model_of, robot_model
 from legged.robots.op3 import OP3
 from legged.robots.spec import RobotSpec
@@ -59,14 +59,8 @@ class SoccerEnv(MjxEnv):
             config = dataclasses.replace(config, sim_dt=robot.timestep)
         self.config, self.robot = config, robot
         self.n_substeps = config.n_substeps
-        if config.velocity_in_state:
-            raise ValueError("env.velocity_in_state: the soccer and OP3 skill environments have no body-velocity "
-                             "estimate in their state (a Go1 task option)")
-        latency = config.randomization.latency_s if config.randomization.enabled else None
-        if latency is not None and round(max(latency) / config.sim_dt) >= self.n_substeps:
-            raise ValueError(f"env.randomization.latency_s: at most {max(latency)} s is a whole control period "
-                             f"({config.ctrl_dt} s) at the model's {config.sim_dt} s physics step; the soccer envs "
-                             "hold the previous targets for part of a control step only: keep it below ctrl_dt")
+        if config.randomization.enabled:
+            check_latency(config.randomization.latency_s, config.sim_dt, config.ctrl_dt)
         m = build_soccer_scene(config.scene, robot)
         m.opt.timestep = config.sim_dt
         self.mj_model = m
@@ -140,20 +134,27 @@ class SoccerEnv(MjxEnv):
     def servo_controls(self, state: State, ctrl: jax.Array) -> jax.Array:
         """What the servos get for the joint targets `ctrl`: with `motor_curve` the targets whose torque stays within
         the motors' torque-speed lines (legged.envs.motor), and with action latency drawn a schedule (n_substeps, nu)
-        whose first physics steps keep each robot's previous targets (as many as its latency)."""
-        dr, data, ids = state.info["dr"], state.pipeline_state, self.layout.actuator_ids
-        if self.config.motor_curve:
-            scale = lambda key: dr[key][:, None] if key in dr else 1.0     # each robot's, on its joints
-            kp, kd = servo_gains(self._base_fields["actuator_gainprm"][ids], self._base_fields["actuator_biasprm"][ids],
-                                 scale("kp"), scale("kd"), dr["strength"][ids])
-            q, qd = data.qpos[self.layout.joint_qpos_adr], data.qvel[self.layout.joint_dof_adr]
-            ctrl = ctrl.at[ids].set(within_motor_curve(ctrl[ids], q, qd, kp, kd, self._force_limit,
-                                                       self._motor_speeds))
-        latency = dr.get("latency")
+        whose first physics steps keep each robot's previous targets, as many as its latency (the previous actions'
+        targets, within the motor lines at the joints' state now: legged.envs.randomize.late_controls)."""
+        ctrl = self._within_motor_curve(state, ctrl)
+        latency = state.info["dr"].get("latency")
         if latency is None:
             return ctrl
+        previous = self._within_motor_curve(state, self.joint_targets(state.info["last_action"]))
         steps = randomize.per_actuator(latency[:, None] * jnp.ones(self.action_size), self._dynamics)
-        return jnp.where(jnp.arange(self.n_substeps)[:, None] < steps, state.pipeline_state.ctrl, ctrl)
+        return late_controls(previous, ctrl, steps, self.n_substeps)
+
+    def _within_motor_curve(self, state: State, ctrl: jax.Array) -> jax.Array:
+        """`ctrl` with every robot's joint targets kept within its motors' torque-speed lines (EnvConfig.motor_curve;
+        the episode's gains, the joints' state now)."""
+        if not self.config.motor_curve:
+            return ctrl
+        dr, data, ids = state.info["dr"], state.pipeline_state, self.layout.actuator_ids
+        scale = lambda key: dr[key][:, None] if key in dr else 1.0     # each robot's, on its joints
+        kp, kd = servo_gains(self._base_fields["actuator_gainprm"][ids], self._base_fields["actuator_biasprm"][ids],
+                             scale("kp"), scale("kd"), dr["strength"][ids])
+        q, qd = data.qpos[self.layout.joint_qpos_adr], data.qvel[self.layout.joint_dof_adr]
+        return ctrl.at[ids].set(within_motor_curve(ctrl[ids], q, qd, kp, kd, self._force_limit, self._motor_speeds))
 
     @property
     def uses_cameras(self) -> bool:
@@ -228,6 +229,10 @@ class SoccerEnv(MjxEnv):
                        out_of_play=info["out_of_play"].astype(jnp.float32), fell=fallen.astype(jnp.float32),
                        dist_to_ball=jnp.linalg.norm(b.ball_pos[:2] - b.pos[:, :2], axis=-1),
                        ball_speed=jnp.linalg.norm(b.ball_vel[:2]), diverged=bad.astype(jnp.float32))
+        if c.velocity_in_state:  # for walkers that read it (op3-walk's state ends with it)
+            now = observe.read_bodies(self.layout, data.qpos, data.qvel)
+            info["velocity_estimate"] = observe.velocity_estimate(now, c.noise.lin_vel if c.noise.enabled else 0.0,
+                                                                  jax.random.fold_in(k_noise, 17))
         obs = self._observe(data, info, k_noise)
         return state.replace(pipeline_state=data, obs=obs, reward=reward.astype(jnp.float32),
                              done=done.astype(jnp.float32), metrics=metrics, info=info)
@@ -364,4 +369,5 @@ class SoccerEnv(MjxEnv):
         return dict(rng=rng, step=jnp.int32(0), last_action=zeros, last_qvel=zeros, score=jnp.zeros(2, jnp.int32),
                     fallen=jnp.zeros(self.n_agents, bool), out_of_play=jnp.int32(0), truncation=jnp.float32(0.0),
                     teleported=jnp.bool_(False), players=initial_memory(self.n_agents),
-                    walker_state=jnp.zeros((self.n_agents, WALKER_STATE_SIZE), jnp.float32))
+                    walker_state=jnp.zeros((self.n_agents, WALKER_STATE_SIZE), jnp.float32),
+                    **({"velocity_estimate": jnp.zeros((self.n_agents, 3))} if self.config.velocity_in_state else {}))

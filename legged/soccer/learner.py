@@ -60,6 +60,9 @@ class LearnerView(MjxEnv):
         if walker is not None and abs(walker.dt - game.dt) > 1e-9:  # its gait clock would run at the wrong speed
             raise ValueError(f"the walker was trained with env.ctrl_dt={walker.dt:g}; this game steps every "
                              f"{game.dt:g} s: set env.ctrl_dt={walker.dt:g}")
+        if walker is not None and walker.velocity_input and not game.config.velocity_in_state:
+            raise ValueError("the walker reads a torso velocity estimate (it was trained with env.velocity_in_state): "
+                             "set env.velocity_in_state=true so that the game keeps one")
         self.estimates_world = walker is not None and walker.prior is not None and game.config.vision
         if game.config.vision_gaze and not self.estimates_world:
             raise ValueError("vision_gaze turns the head toward the player's own estimate of the ball: it needs a "
@@ -142,8 +145,10 @@ class LearnerView(MjxEnv):
         others = state.info["game_obs"]["privileged_state"][LEARNER + 1:, :self.game.policy_state_size]
         memory = state.info["players"][LEARNER + 1:]
         theirs = None if self.walker is None else walker_state[LEARNER + 1:]
+        velocity = state.info.get("velocity_estimate")
+        velocity = None if velocity is None else velocity[LEARNER + 1:]
         step = lambda who: opponent_step(self.net, who, others, memory, self.tables, self.robot.action_scale,
-                                         self.walker, theirs)
+                                         self.walker, theirs, velocity)
         played, moved, stepped = step(opponent)
         if teammate is not None:
             mate = jnp.asarray(self.game.layout.team[LEARNER + 1:] == self.game.layout.team[LEARNER])[:, None]
@@ -172,7 +177,9 @@ class LearnerView(MjxEnv):
                 action = network_actions(self.net, self.state_pilot, features)[0]
         mine = walker_state[LEARNER:LEARNER + 1]
         action = self.walker.with_prior(action[None], features)[0]
-        joints = self.walker.actions(proprio, action[None], mine)[0]
+        velocity = state.info.get("velocity_estimate")
+        joints = self.walker.actions(proprio, action[None], mine,
+                                     None if velocity is None else velocity[LEARNER:LEARNER + 1])[0]
         if self.config.vision_gaze:  # look toward the ball it estimates (the ball's x, y lead the features)
             pan = ball_pan(features[0, PROPRIO_SIZE:PROPRIO_SIZE + 2]) / self.robot.action_scale
             joints = joints.at[HEAD_PAN].set(jnp.where(getting_up(mine[0]), joints[HEAD_PAN], pan))

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -79,6 +80,18 @@ def proprioception(b: Bodies, default_pose, last_action) -> jnp.ndarray:
     return jnp.concatenate([gravity, b.gyro, b.q - default_pose, b.qd, last_action], -1)
 
 
+def local_velocity(b: Bodies) -> jnp.ndarray:
+    """[A, 3]: each torso's linear velocity in its own frame."""
+    return jnp.einsum("aji,aj->ai", b.rot, b.vel)
+
+
+def velocity_estimate(b: Bodies, noise: float, rng) -> jnp.ndarray:
+    """[A, 3]: each torso's velocity in its own frame as a state estimator (IMU and leg odometry) gives it, off by a
+    uniform error within +-`noise` m/s per axis and control step."""
+    truth = local_velocity(b)
+    return truth + noise * jax.random.uniform(rng, truth.shape, minval=-1.0, maxval=1.0) if noise else truth
+
+
 def game_features(b: Bodies, team: np.ndarray, goals: np.ndarray, others: np.ndarray) -> jnp.ndarray:
     """[A, 10 + 4 (A - 1)] in each agent's heading frame: ball position (3) and velocity (3), own goal and
     opponent goal centres (2 + 2), then each teammate and opponent: position and velocity (x, y each)."""
@@ -127,7 +140,7 @@ def privileged_features(b: Bodies, team: np.ndarray, score, time_fraction) -> jn
     upright (1)."""
     sign = jnp.asarray(1.0 - 2.0 * team, jnp.float32)[:, None]
     yaw = b.yaw + jnp.pi * jnp.asarray(team, jnp.float32)
-    local_vel = jnp.einsum("aji,aj->ai", b.rot, b.vel)
+    local_vel = local_velocity(b)
     ball = jnp.concatenate([sign * b.ball_pos[:2], jnp.broadcast_to(b.ball_pos[2:], sign.shape)], -1)
     ball_vel = jnp.concatenate([sign * b.ball_vel[:2], jnp.broadcast_to(b.ball_vel[2:], sign.shape)], -1)
     diff = (score[team] - score[1 - team]).astype(jnp.float32)[:, None]

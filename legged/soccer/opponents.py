@@ -119,17 +119,18 @@ def placo_actions(tables, obs, memory, action_scale: float) -> tuple[jax.Array, 
 
 
 def opponent_step(net: OpponentNet, opp: Opponent, obs, memory, tables, action_scale: float, walker=None,
-                  walker_state=None) -> tuple[jax.Array, jax.Array, jax.Array]:
+                  walker_state=None, velocity=None) -> tuple[jax.Array, jax.Array, jax.Array]:
     """(actions, next memories, next walker states) of the robots an `Opponent` drives, from their features
     [n, obs] and their player memories [n, MEMORY_SIZE] (only the placo player uses and changes them). With a
     `walker` (legged.soccer.walker) a network opponent commands velocities that it turns into joint actions,
-    from the robots' walker states [n, WALKER_STATE_SIZE] (None without a walker)."""
+    from the robots' walker states [n, WALKER_STATE_SIZE] (None without a walker) and, for a walker that reads
+    them, their torso velocity estimates [n, 3]."""
     played, moved = placo_actions(tables, obs, memory, action_scale)
     if walker is None:
         stateless, stepped = opponent_actions(net, opp, obs, action_scale), walker_state
     else:
         command = walker.with_prior(network_actions(net, opp, obs), obs)
-        walked = walker.actions(obs[..., :PROPRIO_SIZE], command, walker_state)
+        walked = walker.actions(obs[..., :PROPRIO_SIZE], command, walker_state, velocity)
         stateless = jnp.where(opp.weight > 0.5, walked, scripted_actions(obs, action_scale))
         stepped = walker.step(walker_state, command, obs[..., :PROPRIO_SIZE])
     use_placo = (opp.weight < 0.5) & (opp.placo > 0.5)

@@ -79,6 +79,9 @@ class Walker:
     """How the get-up actor's layers are joined."""
     getup_residual: bool = True
     """The get-up actor's actions are corrections added to the script's (op3-getup's `residual`)."""
+    velocity_input: bool = False
+    """It reads each robot's torso velocity estimate after its gait clock (op3-walk's `velocity_in_state`): the game
+    must keep one (`velocity_in_state`)."""
     prior: PlacoTables | None = None
     """With the placo player's tables, a commanding player's actions are corrections added to the placo player's
     walking command (to the spot behind the ball, lined up on the goal; `with_prior`); None: the command itself."""
@@ -100,12 +103,19 @@ class Walker:
         low, high = jnp.asarray(self.command_low), jnp.asarray(self.command_high)
         return low + (high - low) * (jnp.clip(action, -1.0, 1.0) + 1.0) / 2.0
 
-    def actions(self, proprio: jax.Array, action: jax.Array, state: jax.Array) -> jax.Array:
+    def actions(self, proprio: jax.Array, action: jax.Array, state: jax.Array,
+                velocity: jax.Array | None = None) -> jax.Array:
         """Joint actions [n, 20] for robots' proprioception [n, 66] (the walk skill's noisy `state` head),
-        commanding actions [n, 3] and walker states [n, WALKER_STATE_SIZE]."""
+        commanding actions [n, 3], walker states [n, WALKER_STATE_SIZE] and, for a walker with `velocity_input`,
+        their torso velocity estimates [n, 3] (the game's `info['velocity_estimate']`)."""
         clock = 2.0 * jnp.pi * state[:, :1]
-        inputs = jnp.concatenate([proprio, self.command(action), state[:, 1:4], jnp.sin(clock), jnp.cos(clock)],
-                                 axis=-1)
+        parts = [proprio, self.command(action), state[:, 1:4], jnp.sin(clock), jnp.cos(clock)]
+        if self.velocity_input:
+            if velocity is None:
+                raise ValueError("this walker reads a torso velocity estimate: the game must keep one "
+                                 "(env.velocity_in_state)")
+            parts.append(velocity)
+        inputs = jnp.concatenate(parts, axis=-1)
         out = network_actions(self.net, self.policy, inputs)
         if self.residual:
             targets = jax.vmap(lambda s: gait_targets(self.gait, s[0], s[1:4]))(state)

@@ -81,13 +81,15 @@ def drill_player(spec: str, env: DrillEnv, checkpoint: str | None = None):
 
 def players_view(trained: SoccerConfig) -> SoccerConfig:
     """The drills' game (SoccerConfig's defaults) with what a player trained on `trained` sees and how: its head
-    camera (size, lens, tilt), the vision flags (heading, sightings, gaze). Not its tracker (vision_tracker): a drill
+    camera (size, lens, tilt), the vision flags (heading, sightings, gaze), the velocity estimate its walker may
+    read. Not its tracker (vision_tracker): a drill
     does not start the player on its kick-off spot, which the tracker needs."""
     scene = dataclasses.replace(SoccerConfig().scene, head_camera_tilt_deg=trained.scene.head_camera_tilt_deg,
                                 head_camera_fovy_deg=trained.scene.head_camera_fovy_deg)
     return dataclasses.replace(SoccerConfig(), vision=trained.vision, camera=trained.camera, scene=scene,
                                vision_heading=trained.vision_heading, vision_sightings=trained.vision_sightings,
-                               vision_sighted_ball=trained.vision_sighted_ball, vision_gaze=trained.vision_gaze)
+                               vision_sighted_ball=trained.vision_sighted_ball, vision_gaze=trained.vision_gaze,
+                               velocity_in_state=trained.velocity_in_state)
 
 
 def drill_env(player: str, drill: DrillConfig, randomize: bool, robot: str = "project") -> DrillEnv:
