@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+from legged.tasks import task_entry
 from policies.eval_report import EvalRequest, evaluation_report
 from policies.plots import line_plot
 from policies.run_dir import CHECKPOINT, RunDir
@@ -28,9 +29,13 @@ def saved_at(run: RunDir) -> dict[int, float]:
 
 def learning_curve(request: EvalRequest, every: int = 1) -> dict:
     """`request` (a `legged eval` request; its checkpoint is ignored) applied to every `every`-th checkpoint of its
-    run and to the last: {"run", "points": [{"step", "wall_s", figures...}]}; ValueError when the run has no
-    checkpoint or its metrics do not say when one was saved."""
+    run and to the last: {"run", "points": [{"step", "wall_s", figures...}]}; ValueError when the run is of a
+    confined task (figures per difficulty), has no checkpoint or its metrics do not say when one was saved."""
     run = RunDir(request.run_dir)
+    task = run.load_config().task  # RunDirError naming the path if it is not a run
+    if task_entry(task).kind == "confined":
+        raise ValueError(f"{run.path}: {task} is evaluated per difficulty level; follow it with `legged eval RUN "
+                         "--difficulty L --checkpoint FILE` (legged curve plots one figure per checkpoint)")
     checkpoints = run.checkpoints()
     if not checkpoints:
         raise ValueError(f"{run.path} has no checkpoint to evaluate")

@@ -324,8 +324,14 @@ def test_a_learning_curve_plots_held_out_figures_against_time_from_process_start
     assert [p["step"] for p in points] == [40, 120] and points[0]["wall_s"] < points[1]["wall_s"]
     assert all(p["tracking_error_mps"] >= 0 and p["fall_rate"] == 0.0 for p in points)
     assert out.stat().st_size > 1000 and report["plot"] == str(out)
-    assert main(["curve", str(tmp_path), "--episodes", "2"]) == 2  # nothing to evaluate: one line
+    empty = RunDir(tmp_path / "empty")
+    empty.create(TrainConfig(task="go1-flat").resolved())
+    assert main(["curve", str(empty.path), "--episodes", "2"]) == 2  # nothing to evaluate: one line
     assert "has no checkpoint to evaluate" in capsys.readouterr().err
+    confined = RunDir(tmp_path / "confined")
+    confined.create(TrainConfig(task="confined-waypoints").resolved())
+    assert main(["curve", str(confined.path)]) == 2
+    assert "evaluated per difficulty level" in capsys.readouterr().err
 
 
 def test_table_puts_saved_evaluations_side_by_side(tmp_path, capsys):

@@ -218,8 +218,8 @@ class SoccerEnv(MjxEnv):
         info["last_action"] = jnp.where(kickoff, 0.0, info["last_action"])
         info["last_qvel"] = jnp.where(kickoff, 0.0, info["last_qvel"])
         info["walker_state"] = jnp.where(kickoff, 0.0, info["walker_state"])
+        now = observe.read_bodies(self.layout, data.qpos, data.qvel)  # after the restarts
         if c.estimate_noise.enabled and c.estimate_noise.sight:  # where each player last saw the ball
-            now = observe.read_bodies(self.layout, data.qpos, data.qvel)
             info["ball_sighting"] = next_sighting(c.estimate_noise, info["ball_sighting"], now.pos[:, :2], now.yaw,
                                                   now.ball_pos[:2], self.dt, info["teleported"])
 
@@ -230,7 +230,6 @@ class SoccerEnv(MjxEnv):
                        dist_to_ball=jnp.linalg.norm(b.ball_pos[:2] - b.pos[:, :2], axis=-1),
                        ball_speed=jnp.linalg.norm(b.ball_vel[:2]), diverged=bad.astype(jnp.float32))
         if c.velocity_in_state:  # for walkers that read it (op3-walk's state ends with it)
-            now = observe.read_bodies(self.layout, data.qpos, data.qvel)
             info["velocity_estimate"] = observe.velocity_estimate(now, c.noise.lin_vel if c.noise.enabled else 0.0,
                                                                   jax.random.fold_in(k_noise, 17))
         obs = self._observe(data, info, k_noise)
