@@ -16,7 +16,7 @@ from policies.run_dir import RunDir, RunDirError
 from policies.soccer.config import SOCCER_KEYS, SelfPlayConfig, SoccerTrainConfig, soccer_override_path
 
 ROOT = Path(__file__).resolve().parents[1]
-WALKER = "assets/policies/op3-walker"
+WALKER = "assets/policies/op3-walker-v1"
 PILOT = "assets/policies/op3-soccer-1v1-pilot-steered"
 STUDENT = "assets/policies/op3-soccer-1v1-vision-piloted"
 GETUP_GAME = ["env.end_on_fall=never", "env.scene.limb_floor_contacts=true"]
@@ -179,3 +179,15 @@ def test_every_committed_teacher_record_loads():
     for record in records:
         raw = yaml.safe_load(record.read_text())
         _assert_moved(raw, load_config(raw))
+
+
+def test_a_game_config_from_before_leg_contacts_keeps_its_legs_passing_through():
+    """op3-walk's default game has the legs touching; a config stored before the field (op3-walker-v1's, every
+    shipped soccer player's) is read as it trained, legs passing through (its stored scene takes the scene class's
+    default, off); one that names the field keeps it."""
+    assert default_config("op3-walk").scene.leg_contacts and not default_config("soccer-1v1").scene.leg_contacts
+    stored = yaml.safe_load((ROOT / "assets/policies/op3-walker-v1/config.yaml").read_text())
+    assert "leg_contacts" not in stored["env"]["scene"]
+    assert load_config(stored).env.scene.leg_contacts is False
+    written = to_dict(TrainConfig(task="op3-walk", env=default_config("op3-walk")).resolved())
+    assert written["env"]["scene"]["leg_contacts"] is True and load_config(written).env.scene.leg_contacts is True

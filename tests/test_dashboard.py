@@ -427,7 +427,7 @@ def test_a_vision_students_estimate_of_the_game_is_recorded_in_the_world_and_sho
     from web.rollout import Recorder, RecorderConfig
 
     view = LearnerView(make("soccer-1v1-vision", vision_sightings=True),
-                       walker=load_walker("assets/policies/op3-walker", prior="placo"))
+                       walker=load_walker("assets/policies/op3-walker-v1", prior="placo"))
     truth = lambda obs: np.concatenate([np.zeros((len(obs["features"]), 3)), obs["features"][:, PROPRIO_SIZE:]], -1)
     traj = Recorder(view, "soccer-1v1-vision", RecorderConfig(physics="native")).record(3, seed=1, act=truth)
     assert traj.estimates.shape == (4, 1, 4, 3)
@@ -479,7 +479,7 @@ def test_a_vision_students_tracked_pose_is_recorded_and_shown(server, tmp_path):
     from web.rollout import Recorder, RecorderConfig
 
     view = LearnerView(make("soccer-1v1-vision", vision_tracker=True),
-                       walker=load_walker("assets/policies/op3-walker", prior="placo"))
+                       walker=load_walker("assets/policies/op3-walker-v1", prior="placo"))
     traj = Recorder(view, "soccer-1v1-vision", RecorderConfig(physics="native")).record(2, seed=1)
     assert traj.tracked.shape == (3, 1, 2, 3)
     state = jax.tree.map(lambda x: x[0], VectorEnv.of(view, 1, "native", 1).reset(jax.random.PRNGKey(1)).state)

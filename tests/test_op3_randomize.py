@@ -148,7 +148,7 @@ def test_soccer_actors_are_bounded_where_the_bound_changes_nothing():
 
     bound = lambda name: action_bound(RunDir(f"assets/policies/{name}").load_config())
     assert bound("op3-walker") == 10.0 and bound("op3-soccer-1v1-vision") is None
-    reach = prior_reach("assets/policies/op3-walker")
+    reach = prior_reach("assets/policies/op3-walker-v1")
     assert bound("op3-soccer-1v1") == pytest.approx(1.0 + reach)
     rng = np.random.default_rng(0)
     prior = rng.uniform(-reach, reach, (10000, 3))

@@ -20,19 +20,21 @@ from policies.run_dir import RunDir
 ROOT = Path(__file__).resolve().parents[1]
 
 BEFORE = {
-    "go1-flat-walker": {"loss_value": 139.78486862182618, "loss_surrogate": -0.06354149591643363,
-                        "loss_entropy": 0.9453128397464752},
-    "op3-soccer-1v1": {"loss_value": 5.357893335819244, "loss_surrogate": -0.016925610974431037,
-                       "loss_entropy": 2.5791271686553956},
+    "go1-flat-walker-v2": {"loss_value": 139.78486862182618, "loss_surrogate": -0.06354149591643363,
+                           "loss_entropy": 0.9453128397464752},
+    "op3-soccer-1v1-v1": {"loss_value": 5.357893335819244, "loss_surrogate": -0.016925610974431037,
+                          "loss_entropy": 2.5791271686553956},
 }
 """The first resumed iteration's losses under the loop before the hooks (policies/rsl_backend.py at commit 70d8522).
-The walker's were measured again after each change of the Go1 environments' action latency (its episodes changed):
-before the whole-period fix, 184.8875389099121 / -0.0679562397301197 / 0.9464436501264573; after it, with the
-controls in force held for a partial latency, 143.31788215637206 / -0.06339863531757146 / 0.9453357100486756 (both
+The soccer player is op3-soccer-1v1-v1 (shipped as op3-soccer-1v1 until its fine-tune with today's walker). The
+walker's (go1-flat-walker-v2, shipped as go1-flat-walker until its last fine-tune) were measured again after
+each change of the Go1 environments' action latency (its episodes changed): before the whole-period fix,
+184.8875389099121 / -0.0679562397301197 / 0.9464436501264573; after it, with the controls in force held for a
+partial latency, 143.31788215637206 / -0.06339863531757146 / 0.9453357100486756 (both
 still given by the loop with those versions of LeggedEnv.prepare); now, with one rule (the previous action's targets,
 within the motor lines at the joints' state now: legged.envs.randomize.late_controls), the figures below."""
 
-ENVS = {"go1-flat-walker": 8, "op3-soccer-1v1": 4}
+ENVS = {"go1-flat-walker-v2": 8, "op3-soccer-1v1-v1": 4}
 """Environments of each resumed run (a few: the figures are the loop's, not the policy's)."""
 
 

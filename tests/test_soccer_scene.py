@@ -111,6 +111,27 @@ def test_limb_floor_pairs_are_optional():
     assert model.npair == build_soccer_scene(SoccerSceneConfig()).npair + 2 * len(limbs)
 
 
+def test_leg_pairs_are_optional_and_stop_crossed_legs():
+    """With leg_contacts, each robot's left thigh, shin and foot touch its right ones (3 x 3 pairs per robot); the
+    same legs pass through each other without it. Crossed legs: the left hip rolled 0.3 rad inward, shins and feet
+    overlap."""
+    plain = build_soccer_scene(SoccerSceneConfig())
+    model = build_soccer_scene(SoccerSceneConfig(leg_contacts=True))
+    names = {frozenset((model.geom(a).name, model.geom(b).name)) for a, b in zip(model.pair_geom1, model.pair_geom2)}
+    assert {"home0/l_foot", "home0/r_foot"} in names and {"away0/l_thigh", "away0/r_shin"} in names
+    assert model.npair == plain.npair + 2 * 9
+
+    def leg_contacts(m):
+        data = _kickoff(m)
+        data.qpos[m.joint("home0/l_hip_roll").qposadr[0]] += 0.3  # the left leg swings inward, under the robot
+        mujoco.mj_forward(m, data)
+        legs = {f"home0/{g}" for g in OP3.thigh_geoms + OP3.calf_geoms + OP3.feet_geoms}
+        return [c for c in data.contact[:data.ncon]
+                if {m.geom(c.geom1).name, m.geom(c.geom2).name} <= legs]
+
+    assert leg_contacts(model) and not leg_contacts(plain)
+
+
 def test_kickoff_positions_face_the_opponent_goal(scene):
     config, model, layout = scene
     data = _kickoff(model)

@@ -181,7 +181,7 @@ def test_in_a_game_it_tracks_the_players_pose_on_the_pitch():
                                  scene=dataclasses.replace(config.scene, head_camera_fovy_deg=70.0),
                                  randomization=SoccerRandomization(), noise=NoiseConfig())  # no sensor errors
     view = LearnerView(make("soccer-1v1-vision", config),
-                       walker=load_walker("assets/policies/op3-walker", prior="placo"))
+                       walker=load_walker("assets/policies/op3-walker-v1", prior="placo"))
     vector = VectorEnv.of(view, 2, "native", 1)
     batch = vector.reset(jax.random.PRNGKey(3))
     estimate = jnp.zeros((2, view.action_size)).at[:, 4].set(1.0)  # no corrections; "the ball 1 m left": it turns
@@ -218,7 +218,7 @@ def test_a_tracker_needs_a_vision_player_that_estimates_the_game():
         make("soccer-1v1-vision", vision_tracker_inputs=True)
     with pytest.raises(ValueError, match="vision_ball_memory_s must be > 0"):
         make("soccer-1v1-vision", vision_tracker=True, vision_ball_memory_s=0.0)
-    walker = dataclasses.replace(load_walker("assets/policies/op3-walker", prior="placo"), prior=None)
+    walker = dataclasses.replace(load_walker("assets/policies/op3-walker-v1", prior="placo"), prior=None)
     with pytest.raises(ValueError, match="needs a player that estimates the game"):
         LearnerView(make("soccer-1v1-vision", vision_tracker=True), walker=walker)
 

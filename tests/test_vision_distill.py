@@ -141,7 +141,7 @@ def test_a_vision_student_learns_from_the_state_player(soccer_teacher, tmp_path,
     assert dataclasses.replace(cfg.env, vision=False) == RunDir(soccer_teacher).load_config().env
 
 
-WALKER = "assets/policies/op3-walker"
+WALKER = "assets/policies/op3-walker-v1"
 DRILL_S = 1.0
 """Episodes of the tests' drills (40 control steps; the drill's own 20 s took 5 minutes on a slow machine)."""
 

@@ -69,6 +69,9 @@ class WalkSkillConfig(SkillConfig):
     """Upper bounds of the random commands."""
     walk_rewards: WalkRewards = WalkRewards()
     """Reward weights of the walking skill."""
+    scene: SoccerSceneConfig = SoccerSceneConfig(leg_contacts=True)
+    """The pitch, with each robot's legs touching each other, as a real OP3's do (walkers fine-tuned on the
+    randomised project model without them put their feet closer and tripped on Menagerie's OP3, whose legs collide)."""
     residual: bool = True
     """The policy's action is added to the reference's (the placo gait's targets at the clock and filtered
     command, as actions): it starts out walking open loop and learns the corrections, which takes far fewer

@@ -65,6 +65,10 @@ class SoccerSceneConfig:
     limb_floor_contacts: bool = False
     """Also pair each robot's arm, thigh and shin capsules with the floor, so that a fallen robot can push
     itself up (op3-getup, and games with a get-up skill); off elsewhere: 8 more pairs per robot cost time."""
+    leg_contacts: bool = False
+    """Pair each robot's legs with each other (thigh, shin and foot of one leg with those of the other), as a real
+    OP3's legs touch when its feet cross; for a model without self-contacts of its own (the project's: Menagerie's
+    OP3 collides its meshes by itself). 9 more pairs per robot on the project's model."""
     home_rgba: tuple[float, float, float, float] = (0.15, 0.35, 0.85, 1.0)
     """Team colour of the home team (torso and head shells), RGBA."""
     away_rgba: tuple[float, float, float, float] = (0.85, 0.2, 0.15, 1.0)

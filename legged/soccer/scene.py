@@ -13,6 +13,8 @@ legged.worlds.mjcf.pair_attributes) with the scene's sliding friction:
   with `limb_floor_contacts` its arms, thighs and shins too (what a robot getting up pushes with);
 - the ball with the floor (condim 6: rolling friction slows it like grass), with each robot's
   `ball_robot_geoms` (feet and shins: what kicks), with every goal box and with the four walls;
+- optionally (`leg_contacts`) each robot's legs with each other: thigh, shin and foot of one leg with those of the
+  other (a model with self-contacts of its own, as Menagerie's OP3, keeps its own instead);
 - optionally (`robot_robot_contacts`) torso-torso and foot-foot between every two robots.
 
 Geom groups: 0 floor, goals and ball (seen and physical); 1 painted lines (thin boxes, seen only; the
@@ -182,8 +184,17 @@ def _add_contacts(spec: mujoco.MjSpec, config: SoccerSceneConfig, robot: RobotSp
             _pair(spec, BALL, box.name, ball)
     for name, _, _ in walls(config):
         _pair(spec, BALL, name, ball)
-    # a model whose geoms collide by contype / conaffinity (Menagerie's) already has its robot-robot contacts
-    if config.robot_robot_contacts and not np.any(alone.geom_contype | alone.geom_conaffinity):
+    # a model whose geoms collide by contype / conaffinity (Menagerie's) already has its self- and robot-robot contacts
+    own_contacts = bool(np.any(alone.geom_contype | alone.geom_conaffinity))
+    if config.leg_contacts and not own_contacts:
+        legs = [robot.geoms_of(leg) for leg in zip(OP3.thigh_geoms, OP3.calf_geoms, OP3.feet_geoms)]  # per leg
+        for p in prefixes:
+            for i, leg in enumerate(legs):
+                for other in legs[i + 1:]:
+                    for a in leg:
+                        for b in other:
+                            _pair(spec, p + a, p + b, floor)
+    if config.robot_robot_contacts and not own_contacts:
         for i, a in enumerate(prefixes):
             for b in prefixes[i + 1:]:
                 for ta in robot.geoms_of(("torso",)):
