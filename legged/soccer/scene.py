@@ -24,6 +24,8 @@ collision geoms and the invisible walls (hidden by MuJoCo's renderer by default)
 
 from __future__ import annotations
 
+import itertools
+
 import mujoco
 import numpy as np
 
@@ -189,11 +191,9 @@ def _add_contacts(spec: mujoco.MjSpec, config: SoccerSceneConfig, robot: RobotSp
     if config.leg_contacts and not own_contacts:
         legs = [robot.geoms_of(leg) for leg in zip(OP3.thigh_geoms, OP3.calf_geoms, OP3.feet_geoms)]  # per leg
         for p in prefixes:
-            for i, leg in enumerate(legs):
-                for other in legs[i + 1:]:
-                    for a in leg:
-                        for b in other:
-                            _pair(spec, p + a, p + b, floor)
+            for leg, other in itertools.combinations(legs, 2):
+                for a, b in itertools.product(leg, other):
+                    _pair(spec, p + a, p + b, floor)
     if config.robot_robot_contacts and not own_contacts:
         for i, a in enumerate(prefixes):
             for b in prefixes[i + 1:]:
