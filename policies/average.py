@@ -8,7 +8,8 @@ square root of the mean variance) and the optimiser's moments; whole numbers (co
 (an optimiser's learning rate) are the largest of the sources. A distillation's teacher must be the same in
 every source (it is copied). The output is a run directory that eval, view, drill, export and `distill.student_init`
 accept: the first source's config.yaml (and teacher.yaml), one checkpoint named by the largest source step, and
-averaged_from.json naming the sources and their weights.
+averaged_from.json naming the sources and their weights. If any source was slimmed (policies.slim: weights only),
+the mean is slimmed too.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import torch
 from policies.checkpoints import load_rsl_checkpoint
 from policies.config import to_dict
 from policies.run_dir import RunDir, RunDirError
+from policies.slim import slim_payload
 
 TEACHER = "teacher_state_dict"
 """The frozen teacher of a distillation checkpoint: copied, never averaged."""
@@ -104,6 +106,8 @@ def average_checkpoints(sources: list[str | Path], out: str | Path, weights: lis
     for key in ("obs_sizes", "num_actions"):
         if any(p[key] != payloads[0][key] for p in payloads):
             raise RunDirError(f"the checkpoints differ in {key}: {[p[key] for p in payloads]}")
+    if any(p.get("slimmed") for p in payloads):  # one source holds weights only: so does the mean
+        payloads = [slim_payload(p) for p in payloads]
     if any(p["alg"].keys() != payloads[0]["alg"].keys() for p in payloads):
         raise RunDirError(f"the checkpoints hold different learners: {[sorted(p['alg']) for p in payloads]}")
     alg = {}

@@ -13,6 +13,7 @@ from policies.distributed import Launch, init_jax_processes
 from policies.environments import build_env  # looked up when a run starts: tests replace it with a small env
 from policies.rsl_backend import train_rsl
 from policies.run_dir import RunDir
+from policies.slim import refuse_slimmed
 from policies.soccer.hooks import SoccerHooks, SteeredHooks
 from policies.soccer.steered import steered_env
 from policies.training_hooks import TrainingHooks
@@ -89,7 +90,7 @@ def resume_run(run_dir: str, progress: bool = True) -> dict:
     run = RunDir(run_dir)
     config = run.load_config()
     refuse_pilot(config)
-    run.latest_checkpoint()  # fail now if there is nothing to resume from
+    refuse_slimmed(run.latest_checkpoint())  # fail now if there is nothing to resume from
     run.clean_stale()
     _prepare(config)
     return _train(config, run, resume=True, progress=progress)

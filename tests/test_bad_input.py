@@ -165,6 +165,7 @@ CASES = {
     "plot: missing run": (["plot", "{d}/none"], "no records"),
     "plot: unknown metric": (["plot", "{d}/run", "--y", "nope"], "no records"),
     "convert: untrusted pickles": (["convert-checkpoints", "{d}/none"], "not a run directory"),
+    "slim: not a run": (["slim", "{d}/none"], "not a run directory"),
     "average: one source": (["average", "{d}/run", "--out", "{d}/avg"], "at least two"),
     "average: missing source": (["average", "{d}/run", "{d}/none", "--out", "{d}/avg"], "neither a run directory"),
 }

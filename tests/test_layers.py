@@ -173,7 +173,7 @@ nothing of legged)."""
 POLICIES_ORDER = [
     ("run files", ("policies", "policies.config_io", "policies.config", "policies.soccer", "policies.soccer.config",
                    "policies.run_dir", "policies.distributed")),
-    ("checkpoints", ("policies.checkpoints",)),
+    ("checkpoints", ("policies.checkpoints", "policies.slim")),
     ("models", ("policies.algorithms", "policies.latent_models", "policies.memory_models", "policies.hib",
                 "policies.teacher_kl", "policies.students", "policies.warm_start", "policies.probe",
                 "policies.soccer.selfplay", "policies.brax_networks")),
@@ -187,7 +187,7 @@ POLICIES_ORDER = [
                        "policies.bench_encoder", "policies.bench_train", "policies.learning_curve")),
 ]
 """The groups of `policies`, lowest first, as LEGGED_ORDER: run files (config I/O, configs, the soccer section of
-the config, run directories, the process launch) < checkpoints (the data-only formats) < models (networks, the HIB
+the config, run directories, the process launch) < checkpoints (the data-only formats, their weights-only form) < models (networks, the HIB
 and teacher-KL losses, the students' distillation losses and starts, warm starts, the linear probe, self-play
 snapshots) < policy loading < the environments runs train and play in (a pilot's steered game among them) and the
 hooks through which a task family adds to the training loop < trainer backends < orchestration (the commands: train, distill, evaluate, drill, navigate, export, convert, average, tables
@@ -242,8 +242,8 @@ def test_the_groups_place_modules_by_their_most_specific_entry():
         [0, 2, 4, 6]
 
 
-LAZY_IMPORTS = 91
-"""Import statements inside functions that import a project module, today: the command line's (legged.cli, 60:
+LAZY_IMPORTS = 92
+"""Import statements inside functions that import a project module, today: the command line's (legged.cli, 61:
 each command imports what it runs) and the dashboard's checks' (web.source), which answer before torch and the
 task registry load; the registry's soccer environments (legged.tasks), loaded when a soccer task is built; Brax's
 trainer (policies.training), loaded by Brax runs only; the placo solver and JAX in the gait table's open-loop

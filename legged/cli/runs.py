@@ -1,5 +1,5 @@
-"""The command line's commands on run directories: `legged convert-checkpoints`, `legged average` and `legged
-curve`."""
+"""The command line's commands on run directories: `legged convert-checkpoints`, `legged slim`, `legged average`
+and `legged curve`."""
 
 from __future__ import annotations
 
@@ -16,6 +16,17 @@ def cmd_convert(args) -> int:
     report = convert_run(args.run_dir, args.trust_pickles)
     print(json.dumps(report) if args.json else f"[convert] {len(report['converted'])} checkpoint(s) converted in "
           f"{report['run']}")
+    return 0
+
+
+def cmd_slim(args) -> int:
+    """`legged slim`: a finished run's checkpoints with the weights only."""
+    from policies.slim import slim_run
+
+    report = slim_run(args.run_dir)
+    print(json.dumps(report) if args.json else
+          f"[slim] {len(report['slimmed'])} of {report['checkpoints']} checkpoint(s) slimmed in {report['run']}: "
+          f"{report['bytes_before'] / 1e6:.1f} MB -> {report['bytes_after'] / 1e6:.1f} MB")
     return 0
 
 
@@ -62,13 +73,19 @@ def _weights(text: str) -> list[float]:
 
 
 def add_run_commands(sub) -> None:
-    """Register `convert-checkpoints`, `average` and `curve`."""
+    """Register `convert-checkpoints`, `slim`, `average` and `curve`."""
     cv = sub.add_parser("convert-checkpoints", help="rewrite a run's old pickled checkpoints as data-only files")
     cv.add_argument("run_dir")
     cv.add_argument("--trust-pickles", action="store_true",
                     help="you trust this run: its pickles may be loaded once to convert them (pickles can run code)")
     cv.add_argument("--json", action="store_true")
     cv.set_defaults(fn=cmd_convert)
+
+    sl = sub.add_parser("slim", help="keep only a finished policy's weights in a run's checkpoints (drop the "
+                                     "optimiser state and self-play pool: to ship it; it can no longer be resumed)")
+    sl.add_argument("run_dir")
+    sl.add_argument("--json", action="store_true", help="one-line JSON")
+    sl.set_defaults(fn=cmd_slim)
 
     av = sub.add_parser("average", help="a new run whose policy's weights are the mean of several checkpoints of "
                                         "one network (a model soup; rsl-rl runs)")
