@@ -38,12 +38,12 @@ def load_any(path: Path) -> dict:
     return load_brax_checkpoint(path) if path.suffix == f".{BRAX_SUFFIX}" else load_rsl_checkpoint(path)
 
 
-def refuse_slimmed(path: Path) -> None:
-    """RunDirError in one line if checkpoint `path` was slimmed (nothing to resume training from)."""
+def refuse_slimmed(path: Path, task: str = "TASK") -> None:
+    """RunDirError in one line if checkpoint `path` (of a run of `task`) was slimmed: nothing to resume from."""
     if load_any(path).get("slimmed"):
         run = path.parent.parent
         raise RunDirError(f"{path} holds a finished policy's weights only (slimmed by `legged slim`: no optimiser "
-                          f"state), so {run} cannot be resumed; fine-tune from it instead: legged train TASK "
+                          f"state), so {run} cannot be resumed; fine-tune from it instead: legged train {task} "
                           f"--init-from {run}")
 
 

@@ -90,7 +90,7 @@ def resume_run(run_dir: str, progress: bool = True) -> dict:
     run = RunDir(run_dir)
     config = run.load_config()
     refuse_pilot(config)
-    refuse_slimmed(run.latest_checkpoint())  # fail now if there is nothing to resume from
+    refuse_slimmed(run.latest_checkpoint(), config.task)  # fail now if there is nothing to resume from
     run.clean_stale()
     _prepare(config)
     return _train(config, run, resume=True, progress=progress)

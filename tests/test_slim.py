@@ -50,7 +50,8 @@ def test_a_slimmed_run_acts_as_before_and_is_smaller(source, tmp_path, capsys):
 def test_a_slimmed_run_refuses_to_resume_and_names_init_from(tmp_path):
     run = shutil.copytree(RSL_RUN, tmp_path / "run")
     slim_run(run)
-    with pytest.raises(RunDirError, match="cannot be resumed; fine-tune from it instead: legged train TASK "
+    task = RunDir(run).load_config().task
+    with pytest.raises(RunDirError, match=f"cannot be resumed; fine-tune from it instead: legged train {task} "
                                           "--init-from"):
         training.resume_run(str(run), progress=False)
 
