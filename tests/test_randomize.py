@@ -47,6 +47,9 @@ def test_the_default_ranges_contain_every_reference_go1(name, model):
     assert min(MUJOCO_SOLIMP[0], SOFT_SOLIMP[0]) <= dmin <= max(MUJOCO_SOLIMP[0], SOFT_SOLIMP[0])
     if name == "menagerie":
         np.testing.assert_allclose(foot["solimp"], SOFT_SOLIMP)
+    assert COVERING["impratio"][0] <= model.opt.impratio <= COVERING["impratio"][1], (name, model.opt.impratio)
+    assert model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL or COVERING["elliptic_share"] > 0, name
+    assert model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC or COVERING["elliptic_share"] < 1, name
 
 
 def test_draws_lie_in_their_ranges_and_the_latency_in_whole_steps():
@@ -62,6 +65,10 @@ def test_draws_lie_in_their_ranges_and_the_latency_in_whole_steps():
         low, high = COVERING[name]
         assert float(dr[key].min()) >= low - 1e-6 and float(dr[key].max()) <= high + 1e-6, key  # float32
     assert set(np.unique(dr["latency"]).tolist()) == {0, 1, 2, 3, 4}  # 0-20 ms in 5 ms steps
+    assert 0.4 < float(dr["elliptic"].mean()) < 0.6 and set(np.unique(dr["elliptic"]).tolist()) == {0.0, 1.0}
+    low, high = COVERING["impratio"]
+    assert low - 1e-4 <= float(dr["impratio"].min()) and float(dr["impratio"].max()) <= high + 1e-3
+    assert 0.4 < float((dr["impratio"] < 10.0).mean()) < 0.6  # log-uniform: half below the geometric middle
     assert float(np.abs(dr["encoder_offset"]).max()) <= COVERING["encoder_offset"]
     assert float(np.abs(dr["gyro_bias"]).max()) <= COVERING["imu_bias"][1]
 
@@ -140,6 +147,32 @@ def test_condim_is_drawn_through_the_feets_spin_friction():
     np.testing.assert_allclose(np.asarray(env.mjx_model_for(info).pair_friction), fields["pair_friction"][0], rtol=1e-6)
     plain = make("go1-flat", randomization=dataclasses.replace(GO1_RANDOMIZATION, contact_spin=None)).mj_model
     assert set(plain.pair_dim) == {3}
+
+
+def test_the_friction_cone_is_drawn_per_robot_in_the_native_engine_and_its_impratio_in_mjx():
+    """A robot drawn elliptic is simulated with elliptic cones by the native engine, the others with the model's
+    pyramidal ones, each with its drawn impratio; an MJX model takes the impratio and keeps its compiled cone; the
+    critic reads both draws in a part of its own after the older model quantities."""
+    from legged.envs.native import NativePhysics
+    from legged.tasks import make
+
+    env = make("go1-flat")
+    infos = [env.spawn(k).info for k in jax.random.split(jax.random.PRNGKey(5), 8)]
+    elliptic = np.array([float(i["dr"]["elliptic"]) for i in infos])
+    impratio = np.array([float(i["dr"]["impratio"]) for i in infos])
+    assert 0 < elliptic.sum() < 8  # both kinds among these eight
+    rows = jax.tree_util.tree_map(lambda *x: np.stack([np.asarray(v) for v in x]), *infos)
+    physics = NativePhysics(env, 8, 1)
+    physics.load(np.arange(8), np.tile(env.mj_model.qpos0, (8, 1)), np.zeros((8, env.mj_model.nv)),
+                 np.zeros((8, env.mj_model.nu)), env.native_model_fields(rows, np.arange(8)))
+    models = [physics.batch.get_model(i) for i in range(8)]
+    cones = [mujoco.mjtCone.mjCONE_ELLIPTIC if e else mujoco.mjtCone.mjCONE_PYRAMIDAL for e in elliptic]
+    assert [m.opt.cone for m in models] == cones
+    np.testing.assert_allclose([m.opt.impratio for m in models], impratio, rtol=1e-6)
+    mjx = env.mjx_model_for(infos[0])
+    assert float(mjx.opt.impratio) == pytest.approx(impratio[0], rel=1e-6) and mjx.opt.cone == env.mj_model.opt.cone
+    names = [n for n, _ in env.observation_layout()["privileged_state"]]
+    assert names[-2:] == ["model_dynamics", "friction_cone"]
 
 
 def test_nominal_evaluation_turns_randomisation_and_noise_off_and_nothing_else():

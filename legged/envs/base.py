@@ -26,7 +26,8 @@ from legged.envs.physics import PhysicsView, Spawn
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
 from legged.envs.motor import motor_limits, servo_gains, within_motor_curve
 from legged.envs.rewards import penalty_terms
-from legged.envs.randomize import MODEL_DR, check_latency, draw, late_controls, randomized_fields
+from legged.envs.randomize import (CONE_DR, MODEL_DR, check_latency, draw, late_controls, mjx_fields,
+                                   randomized_fields)
 from legged.robots.models import mjx_model_of, robot_model
 from legged.robots.spec import RobotSpec
 from legged.sensors.heightscan import surface_height
@@ -83,6 +84,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
             "body_mass", "body_inertia", "body_ipos", "pair_friction", "actuator_gainprm", "actuator_biasprm",
             "dof_damping", "dof_armature", "dof_frictionloss", "pair_solref", "pair_solimp", "pair_margin")}
         self._base_fields["joint_dofs"] = jnp.asarray(np.eye(m.nv, dtype=np.float32)[self._vadr])
+        self._base_fields["cone"] = jnp.asarray(m.opt.cone, jnp.int32)
         self._base_fields["foot_pairs"] = jnp.asarray(np.isin(m.pair_geom1, self._feet) | np.isin(m.pair_geom2, self._feet),
                                                       jnp.float32)
         self._weight = float(m.body_subtreemass[self._trunk] * 9.81)
@@ -207,7 +209,8 @@ class LeggedEnv(MjxEnv, abc.ABC):
         """The MJX model with randomisation `dr` applied (the nominal model when disabled)."""
         if not self.config.randomization.enabled:
             return self.mjx_model
-        return self.mjx_model.replace(**randomized_fields(self._base_fields, dr, self._trunk))
+        return self.mjx_model.replace(**mjx_fields(self.mjx_model, randomized_fields(self._base_fields, dr,
+                                                                                     self._trunk)))
 
     def joint_targets(self, action: jax.Array) -> jax.Array:
         """PD targets (actuator controls) for an action."""
@@ -390,6 +393,9 @@ class LeggedEnv(MjxEnv, abc.ABC):
                  for k in MODEL_DR if k in dr]  # the latency in seconds: a physics step's length varies by model
         if drawn:  # the model randomisation, where a run draws it (after the older entries, which keep their place)
             privileged.append(("model_dynamics", jnp.concatenate(drawn)))
+        cone = [jnp.log(dr[k]) / jnp.log(100.0) if k == "impratio" else dr[k] for k in CONE_DR if k in dr]
+        if cone:  # the solver's friction cone (impratio on a log scale: 0 at 1, 1 at 100)
+            privileged.append(("friction_cone", jnp.stack(cone).astype(jnp.float32)))
         return state, privileged
 
     def _observe(self, data: PhysicsView, info, rng) -> tuple[dict, dict]:

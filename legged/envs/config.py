@@ -47,6 +47,15 @@ class RandomizationConfig:
     robot's foot: Go1 0.02 and 0.01 m): with it set the feet's pairs with the floor are condim 6, and 0 resists no
     spin or roll, as a condim-3 contact (the project's and Playground's Go1), 1 as Menagerie's condim-6 feet; a
     static contact dimension with a drawn coefficient, so MJX keeps one model shape (None: the model's own contact)."""
+    elliptic_share: float | None = None
+    """Share of robots whose contacts the solver treats with elliptic friction cones instead of the model's own cone
+    (MuJoCo's opt.cone: MuJoCo Menagerie's Go1 has elliptic cones, the project's and Playground's pyramidal ones),
+    drawn per robot. Native physics only: MJX compiles one cone type, the model's, and draws `impratio` alone (None:
+    the model's cone for every robot)."""
+    impratio: tuple[float, float] | None = None
+    """Range of the solver's ratio of friction to normal constraint impedance (opt.impratio), drawn log-uniformly per
+    robot: 1 is MuJoCo's default, 100 Menagerie's Go1, whose elliptic cones then hardly let a foot slip, spin or roll
+    (None: the model's)."""
     latency_s: tuple[float, float] | None = None
     """Range of the action latency, seconds, drawn in whole physics steps: for that long after a control step begins
     the previous joint targets still act (None: none)."""
@@ -67,12 +76,13 @@ SOFT_SOLIMP = (0.015, 1.0, 0.023, 0.5, 2.0)
 
 COVERING = dict(joint_damping=(0.3, 2.5), joint_armature=(0.004, 0.02), joint_frictionloss=(0.1, 1.2),
                 contact_softness=(0.0, 1.0), contact_timeconst=(0.01, 0.03), contact_margin=(0.0, 0.002),
-                contact_spin=(0.0, 1.5), joint_spread=0.6,
+                contact_spin=(0.0, 1.5), joint_spread=0.6, elliptic_share=0.5, impratio=(1.0, 100.0),
                 latency_s=(0.0, 0.02), encoder_offset=0.02, imu_bias=(0.03, 0.05))
 """Ranges of the model randomisation that covers every reference model of the Go1 (the project's, MuJoCo Menagerie's
 and MuJoCo Playground's: damping 0.5-2, armature 0.005-0.01, friction loss 0.2-1.0, plain to soft feet with 0-1 mm of
-margin, condim 3 to condim 6; legged.robots.models), with up to 20 ms of action latency and small sensor biases. The Go1 tasks train with
-them by default (GO1_RANDOMIZATION); runs saved before they existed load without."""
+margin, condim 3 to condim 6, pyramidal or elliptic friction cones with impratio 1-100; legged.robots.models), with up to
+20 ms of action latency and small sensor biases. The Go1 tasks train with them by default (GO1_RANDOMIZATION); runs
+saved before they existed load without."""
 
 
 GO1_RANDOMIZATION = RandomizationConfig(enabled=True, **COVERING)

@@ -8,6 +8,8 @@ unchanged; their keys come from a separate stream (`fold_in(rng, 1)`) for the sa
 
 from __future__ import annotations
 
+import math
+
 import jax
 import jax.numpy as jnp
 
@@ -17,6 +19,11 @@ MUJOCO_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
 """MuJoCo's default solimp: the hard end of RandomizationConfig.contact_softness."""
 MODEL_DR = ("damping", "armature", "frictionloss", "softness", "timeconst", "margin", "latency", "spin")
 """Randomised model quantities a teacher's privileged observation holds after the older ones (where drawn)."""
+CONE_DR = ("elliptic", "impratio")
+"""The solver's friction-cone draws (RandomizationConfig.elliptic_share, impratio): a privileged part of their own,
+after MODEL_DR's, so that a warm start keeps the critic's weights of the older quantities."""
+ELLIPTIC = 1
+"""mujoco.mjtCone.mjCONE_ELLIPTIC, as opt.cone holds it."""
 
 
 def draw(c: RandomizationConfig, rng: jax.Array, nbody: int, nu: int, sim_dt: float, n_substeps: int,
@@ -60,6 +67,10 @@ def draw_model(c, rng: jax.Array, nu: int, sim_dt: float, n_substeps: int) -> di
             dr[key] = u(more[i], r, shape)
     if getattr(c, "contact_spin", None) is not None:  # its own key: the others draw what they drew before it
         dr["spin"] = u(jax.random.fold_in(rng, 2), c.contact_spin)
+    if getattr(c, "elliptic_share", None) is not None:  # own keys as the spin's
+        dr["elliptic"] = (jax.random.uniform(jax.random.fold_in(rng, 3)) < c.elliptic_share).astype(jnp.float32)
+    if getattr(c, "impratio", None) is not None:  # log-uniform: as many robots between 1 and 10 as between 10 and 100
+        dr["impratio"] = jnp.exp(u(jax.random.fold_in(rng, 4), tuple(math.log(r) for r in c.impratio)))
     if c.latency_s is not None:
         low, high = (min(int(round(t / sim_dt)), n_substeps) for t in c.latency_s)
         dr["latency"] = jax.random.randint(more[6], (), low, high + 1)
@@ -149,4 +160,17 @@ def model_fields(base: dict, dr: dict, xp=jnp) -> dict:
         out["pair_solref"] = xp.where(feet, xp.concatenate([timeconst, rest], -1), solref)
     if "margin" in dr:
         out["pair_margin"] = xp.where(feet[:, 0], xp.asarray(dr["margin"])[..., None], base["pair_margin"])
+    if "impratio" in dr:
+        out["opt.impratio"] = xp.asarray(dr["impratio"])
+    if "elliptic" in dr:  # the model's cone where not drawn elliptic (an MJX model keeps its own: see `mjx_fields`)
+        out["opt.cone"] = xp.where(xp.asarray(dr["elliptic"]) > 0, ELLIPTIC, base["cone"]).astype(xp.int32)
     return out
+
+
+def mjx_fields(model, fields: dict) -> dict:
+    """`randomized_fields` as arguments of an MJX model's `replace`: the solver options (`opt.<name>`) inside its
+    `opt`, less the friction cone, which MJX compiles into its programs (one cone for every environment)."""
+    fields = dict(fields)
+    options = {k[4:]: fields.pop(k) for k in [k for k in fields if k.startswith("opt.")]}
+    options.pop("cone", None)
+    return dict(fields, opt=model.opt.replace(**options)) if options else fields
