@@ -49,7 +49,7 @@ CAMERA_CNN = {"output_channels": [16, 32, 32], "kernel_size": [5, 3, 3], "stride
 """The actor's image encoder when the task has a `camera` observation (40 x 30 -> 20 x 15 -> 10 x 7 -> 5 x 3, 32
 channels, flattened to 480: no global pooling, which would lose where in the image the ball and goals are)."""
 
-DYNAMICS_GROUPS = ("dynamics", "com", "motor_strength", "model_dynamics")
+DYNAMICS_GROUPS = ("dynamics", "com", "motor_strength", "model_dynamics", "friction_cone")
 """Entries of `privileged_state` that hold an episode's randomised parameters (probe targets, HIB negatives)."""
 
 
