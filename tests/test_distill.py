@@ -19,10 +19,10 @@ from policies.run_dir import RunDir
 
 H = 3
 """History steps of these tests' students."""
-SIZES = {"state": 45, "privileged_state": 155, "history": 45 * H}
+SIZES = {"state": 45, "privileged_state": 157, "history": 45 * H}
 LAYOUT = {"privileged_state": [("state", 45), ("base_lin_vel", 3), ("base_ang_vel", 3), ("contact_forces", 7),
                                ("dynamics", 4), ("com", 3), ("motor_strength", 12), ("task", 37),
-                               ("model_dynamics", 41)]}
+                               ("model_dynamics", 41), ("friction_cone", 2)]}
 TINY = ["ppo.actor_hidden=[32, 32]", "ppo.critic_hidden=[32, 32]", "latent.encoder_hidden=[32]", "latent.latent_dim=4",
         f"latent.history_steps={H}", "ppo.num_steps_per_env=4", "ppo.num_mini_batches=2", "latent.infonce_samples=16"]
 
@@ -108,7 +108,7 @@ def test_ppo_algorithms_update_on_synthetic_rollouts(algo):
     cfg = config(algo)
     rng = np.random.default_rng(1)
     n = 8
-    dynamics = rng.normal(size=(n, 19 + 41))
+    dynamics = rng.normal(size=(n, 19 + 41 + 2))
     alg = build_algorithm(cfg, observations(n, rng, dynamics), n, 12, "cpu")
     if algo.startswith("hib"):
         attach_information_bottleneck(alg, cfg, LAYOUT, seed=0)

@@ -187,13 +187,14 @@ POLICIES_ORDER = [
                        "policies.bench_encoder", "policies.bench_train", "policies.learning_curve")),
 ]
 """The groups of `policies`, lowest first, as LEGGED_ORDER: run files (config I/O, configs, the soccer section of
-the config, run directories, the process launch) < checkpoints (the data-only formats, their weights-only form) < models (networks, the HIB
-and teacher-KL losses, the students' distillation losses and starts, warm starts, the linear probe, self-play
-snapshots) < policy loading < the environments runs train and play in (a pilot's steered game among them) and the
-hooks through which a task family adds to the training loop < trainer backends < orchestration (the commands: train, distill, evaluate, drill, navigate, export, convert, average, tables
-and plots). The soccer-only modules (policies.soccer) sit in the groups of their jobs: the subpackage and its
-config with the run files (policies.config imports the config), selfplay with the models, steered and the
-training hooks with the environments, drill with the orchestration."""
+the config, run directories, the process launch) < checkpoints (the data-only formats, their weights-only form) <
+models (networks, the HIB and teacher-KL losses, the students' distillation losses and starts, warm starts, the
+linear probe, self-play snapshots) < policy loading < the environments runs train and play in (a pilot's steered game
+among them) and the hooks through which a task family adds to the training loop < trainer backends < orchestration
+(the commands: train, distill, evaluate, drill, navigate, export, convert, average, tables and plots). The
+soccer-only modules (policies.soccer) sit in the groups of their jobs: the subpackage and its config with the run
+files (policies.config imports the config), selfplay with the models, steered and the training hooks with the
+environments, drill with the orchestration."""
 
 
 def _group(module: str, order: list) -> int | None:

@@ -71,7 +71,7 @@ def trained_run(tiny_env, tmp_path_factory):
 def test_adapter_shapes_time_outs_and_zero_copy(tiny_env):
     venv = RslVecEnv(VectorEnv.of(tiny_env, BATCH, "native", 1), seed=0)
     obs = venv.get_observations()
-    assert obs["state"].shape == (BATCH, 42) and obs["privileged_state"].shape == (BATCH, 74 + 41)  # + the draws
+    assert obs["state"].shape == (BATCH, 42) and obs["privileged_state"].shape == (BATCH, 74 + 41 + 2)  # + draws, cone
     assert obs["state"].dtype == torch.float32
     assert obs["state"].data_ptr() == venv._obs["state"].unsafe_buffer_pointer()  # DLPack: no copy
     for k in range(10):
