@@ -81,8 +81,8 @@ COVERING = dict(joint_damping=(0.3, 2.5), joint_armature=(0.004, 0.02), joint_fr
 """Ranges of the model randomisation that covers every reference model of the Go1 (the project's, MuJoCo Menagerie's
 and MuJoCo Playground's: damping 0.5-2, armature 0.005-0.01, friction loss 0.2-1.0, plain to soft feet with 0-1 mm of
 margin, condim 3 to condim 6, pyramidal or elliptic friction cones with impratio 1-100; legged.robots.models), with
-up to 20 ms of action latency and small sensor biases. The Go1 tasks train with them by default (GO1_RANDOMIZATION); runs
-saved before they existed load without."""
+up to 20 ms of action latency and small sensor biases. The Go1 tasks train with them by default (GO1_RANDOMIZATION);
+runs saved before they existed load without."""
 
 
 GO1_RANDOMIZATION = RandomizationConfig(enabled=True, **COVERING)
