@@ -12,6 +12,7 @@ import math
 
 import jax
 import jax.numpy as jnp
+import mujoco
 
 from legged.envs.config import SOFT_SOLIMP, RandomizationConfig
 
@@ -22,8 +23,6 @@ MODEL_DR = ("damping", "armature", "frictionloss", "softness", "timeconst", "mar
 CONE_DR = ("elliptic", "impratio")
 """The solver's friction-cone draws (RandomizationConfig.elliptic_share, impratio): a privileged part of their own,
 after MODEL_DR's, so that a warm start keeps the critic's weights of the older quantities."""
-ELLIPTIC = 1
-"""mujoco.mjtCone.mjCONE_ELLIPTIC, as opt.cone holds it."""
 
 
 def draw(c: RandomizationConfig, rng: jax.Array, nbody: int, nu: int, sim_dt: float, n_substeps: int,
@@ -163,7 +162,8 @@ def model_fields(base: dict, dr: dict, xp=jnp) -> dict:
     if "impratio" in dr:
         out["opt.impratio"] = xp.asarray(dr["impratio"])
     if "elliptic" in dr:  # the model's cone where not drawn elliptic (an MJX model keeps its own: see `mjx_fields`)
-        out["opt.cone"] = xp.where(xp.asarray(dr["elliptic"]) > 0, ELLIPTIC, base["cone"]).astype(xp.int32)
+        elliptic = int(mujoco.mjtCone.mjCONE_ELLIPTIC)
+        out["opt.cone"] = xp.where(xp.asarray(dr["elliptic"]) > 0, elliptic, base["cone"]).astype(xp.int32)
     return out
 
 
