@@ -83,6 +83,17 @@ def bench_rollout(env, batch: int, seconds: float, seed: int, threads: int) -> d
     return {"env_steps_per_s": round(steps * batch / (time.perf_counter() - t0), 1), "compile_s": 0.0}
 
 
+def mid_episode_states(env, count: int = 8, seed: int = 0, steps: int = 50) -> list[mujoco.MjData]:
+    """`count` forward-computed MjData of the environment after `steps` control steps of random actions from its
+    spawns (contacts made, the robot moving), for MuJoCo's timers."""
+    native = NativeEnvs(env, count, threads=1)
+    state = native.reset(jax.random.split(jax.random.PRNGKey(seed), count))
+    rng = np.random.default_rng(seed)
+    for _ in range(steps):
+        state = native.step(state, jnp.asarray(rng.uniform(-0.5, 0.5, (count, env.action_size)), jnp.float32))
+    return [native.data(i) for i in range(count)]
+
+
 PROFILE_TIMERS = ("step", "forward", "position", "pos_kinematics", "pos_inertia", "pos_collision", "col_broad",
                   "col_narrow", "pos_make", "pos_project", "velocity", "actuation", "constraint", "advance")
 """MuJoCo's timers (mjData.timer, mjtTimer without its prefix) a physics profile reports, the step first."""

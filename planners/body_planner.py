@@ -96,8 +96,13 @@ class PlannerConfig:
     """Body-box margin and leg-reach check."""
     crouch_speed: float | None = None
     """Speed limit at waypoints where the body must crouch (where the ceiling, less the body-box margin, leaves its
-    centre less than the robot's standing height above the floor: under a bar or a low roof), m/s; the plan's `speeds` hand it to the follower (None: no
-    limit of the plan's own)."""
+    centre less than the robot's standing height above the floor: under a bar or a low roof), m/s; the plan's
+    `speeds` hand it to the follower (None: no limit of the plan's own)."""
+    turn_accel: float | None = None
+    """Largest sideways acceleration the plan asks of the body in its turns, m/s^2: where the path turns with curvature
+    k (a waypoint's turn angle over the mean length of the segments beside it), the speed limit there and at the next
+    waypoint is sqrt(turn_accel / k); the plan's `speeds` hand it to the follower (None: no limit of the plan's
+    own)."""
     space: str = "projected"
     """projected: search x, y, yaw, with height, roll and pitch put in the middle of the feasible band
     (planners.pose_band; narrow height bands cost nothing); full: sample all six (the earlier planner)."""
@@ -112,6 +117,8 @@ class PlannerConfig:
                 raise PlanningError(f"{name} must be > 0, got {getattr(self, name)}")
         if self.crouch_speed is not None and not 0 < self.crouch_speed < math.inf:
             raise PlanningError(f"crouch_speed must be a positive speed in m/s, got {self.crouch_speed}")
+        if self.turn_accel is not None and not 0 < self.turn_accel < math.inf:
+            raise PlanningError(f"turn_accel must be a positive acceleration in m/s^2, got {self.turn_accel}")
         if self.max_checks < 0:
             raise PlanningError(f"max_checks must be >= 0 (0: the time limit alone), got {self.max_checks}")
         if not (0 <= self.max_roll < math.pi / 2 and 0 <= self.max_pitch < math.pi / 2):
@@ -131,7 +138,8 @@ class Plan:
     planner: str
     """Canonical name of the planner used."""
     speeds: np.ndarray | None = None
-    """Speed limit per waypoint, m/s (NaN: none of the plan's own), or None (`PlannerConfig.crouch_speed`)."""
+    """Speed limit per waypoint, m/s (NaN: none of the plan's own), or None (`PlannerConfig.crouch_speed` and
+    `turn_accel` unset)."""
 
     def to_json(self) -> dict:
         """The plan as a JSON-friendly dict (waypoints rounded to 0.1 mm / 0.1 mrad)."""
@@ -352,12 +360,39 @@ def _finish(vertices, space, checker, start_pose, goal_pose, config: PlannerConf
     bad = np.flatnonzero(~checker.valid(waypoints))
     if bad.size:  # cannot happen if every motion was validated; refuse rather than hand out a colliding path
         raise PlanningError(f"internal: waypoints {bad.tolist()} of the planned path fail the body check")
-    speeds = None
+    return Plan(waypoints=waypoints, length_m=path_length(waypoints), plan_time_s=float(plan_time), planner=name,
+                speeds=_plan_speeds(waypoints, checker, config))
+
+
+def turn_speeds(waypoints: np.ndarray, accel: float) -> np.ndarray:
+    """Speed limit per waypoint of a path (n, >= 2) from its turns, m/s (inf where it runs straight): at waypoint i,
+    where the horizontal path turns by angle a between segments of mean length l, the curvature a / l allows
+    sqrt(accel * l / a); the limit holds at i and at i + 1 (the body turns as it leaves i)."""
+    xy = np.asarray(waypoints, float)[:, :2]
+    limits = np.full(len(xy), np.inf)
+    if len(xy) < 3:
+        return limits
+    a, b = xy[1:-1] - xy[:-2], xy[2:] - xy[1:-1]
+    angle = np.abs(np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], np.sum(a * b, axis=1)))
+    length = 0.5 * (np.linalg.norm(a, axis=1) + np.linalg.norm(b, axis=1))
+    turning = angle > 1e-3  # a thousandth of a radian: straight (simplified paths keep such kinks)
+    limits[1:-1][turning] = np.sqrt(accel * length[turning] / angle[turning])
+    limits[2:] = np.minimum(limits[2:], limits[1:-1])
+    return limits
+
+
+def _plan_speeds(waypoints: np.ndarray, checker, config: PlannerConfig) -> np.ndarray | None:
+    """The plan's own speed limit per waypoint (NaN: none): `crouch_speed` where the body must crouch, the turns'
+    limits of `turn_accel`, the lower where both apply; None when the config sets neither."""
+    if config.crouch_speed is None and config.turn_accel is None:
+        return None
+    limits = np.full(len(waypoints), np.inf)
     if config.crouch_speed is not None:
         crouched = checker.headroom(waypoints) < checker.robot.standing_height  # a standing body would not fit
-        speeds = np.where(crouched, config.crouch_speed, np.nan)
-    return Plan(waypoints=waypoints, length_m=path_length(waypoints), plan_time_s=float(plan_time), planner=name,
-                speeds=speeds)
+        limits = np.where(crouched, config.crouch_speed, limits)
+    if config.turn_accel is not None:
+        limits = np.minimum(limits, turn_speeds(waypoints, config.turn_accel))
+    return np.where(np.isfinite(limits), limits, np.nan)
 
 
 def nearest_valid_pose(checker: BodyChecker, pose, config: PlannerConfig, search_radius: float = 0.1) -> np.ndarray:

@@ -16,12 +16,7 @@ import platform
 import tempfile
 from pathlib import Path
 
-import jax
-import jax.numpy as jnp
-import numpy as np
-
-from legged.bench import bench_rollout, physics_profile
-from legged.envs.native import NativeEnvs
+from legged.bench import bench_rollout, mid_episode_states, physics_profile
 from policies.config import TrainConfig, apply_overrides
 from policies.environments import build_env
 from policies.run_dir import RunDir
@@ -88,22 +83,11 @@ def bench_train(task: str, iterations: int = 10, num_envs: int = 1024, threads: 
         bare = bench_rollout(env, num_envs, rollout_seconds, seed, threads)["env_steps_per_s"]
         record.update(rollout_env_steps_per_s=bare, loop_vs_rollout=round(record["loop_env_steps_per_s"] / bare, 3))
         say(f"{task}: MuJoCo's timers over {profile_steps} physics steps of 8 states")
-        record["physics_profile"] = physics_profile(env.native_model(), _mid_episode_states(env, num_envs, seed),
+        record["physics_profile"] = physics_profile(env.native_model(), mid_episode_states(env, 8, seed),
                                                     profile_steps)
     record.update(cpu=cpu_model(), cores=len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else
                   os.cpu_count())
     return record
-
-
-def _mid_episode_states(env, num_envs: int, seed: int, count: int = 8, steps: int = 50) -> list:
-    """`count` forward-computed MjData of the environment after `steps` control steps of random actions from its
-    spawns (contacts made, the robot moving), for MuJoCo's timers."""
-    native = NativeEnvs(env, count, threads=1)
-    state = native.reset(jax.random.split(jax.random.PRNGKey(seed), count))
-    rng = np.random.default_rng(seed)
-    for _ in range(steps):
-        state = native.step(state, jnp.asarray(rng.uniform(-0.5, 0.5, (count, env.action_size)), jnp.float32))
-    return [native.data(i) for i in range(count)]
 
 
 def bench_train_median(task: str, repeats: int = 3, **kwargs) -> dict:

@@ -22,9 +22,10 @@ TINY_RUN = ["env.episode_seconds=0.2", "ppo.num_steps_per_env=5", "ppo.num_mini_
 iteration 2."""
 
 
-HEAVIEST_FILES = ("test_envs.py", "test_vision_distill.py", "test_soccer_env.py", "test_dashboard.py",
-                  "test_training.py", "test_skills.py", "test_walker.py", "test_native.py", "test_soccer_training.py",
-                  "test_follower.py", "test_distill.py", "test_training_brax.py", "test_placo_player.py")
+HEAVIEST_FILES = ("test_envs.py", "test_vision_distill.py", "test_mjx_randomized.py", "test_soccer_env.py",
+                  "test_dashboard.py", "test_training.py", "test_skills.py", "test_walker.py", "test_native.py",
+                  "test_soccer_training.py", "test_follower.py", "test_distill.py", "test_training_brax.py",
+                  "test_placo_player.py")
 """Test files by their measured time, longest first (`--durations=0` on a slow 2-core machine, 2026-11-27, less
 what later cuts saved: test_envs ~1,100 s, test_vision_distill ~700, test_soccer_env ~600, ... down to ~200 s).
 They start first so that pytest-xdist's two workers end together: a long file handed out last keeps one worker
@@ -39,11 +40,11 @@ slow machine (the persistent XLA cache below saves their compilation, not their 
 
 
 SLOW_FILES = ("test_vision_distill.py", "test_soccer_env.py", "test_envs.py", "test_dashboard.py", "test_training.py",
-              "test_distributed.py", "test_walker.py", "test_skills.py", "test_mjx_vs_native.py", "test_op3_randomize.py",
-              "test_native_raycam.py", "test_soccer_training.py", "test_steered.py", "test_op3_fidelity.py",
-              "test_training_brax.py", "test_follower.py", "test_native.py", "test_distill.py", "test_placo_player.py",
-              "test_resume_losses.py", "test_raycam.py", "test_tracker.py", "test_randomize.py",
-              "test_peer_dm_control.py")
+              "test_distributed.py", "test_walker.py", "test_skills.py", "test_mjx_vs_native.py",
+              "test_mjx_randomized.py", "test_op3_randomize.py", "test_native_raycam.py", "test_soccer_training.py",
+              "test_steered.py", "test_op3_fidelity.py", "test_training_brax.py", "test_follower.py", "test_native.py",
+              "test_distill.py", "test_placo_player.py", "test_resume_losses.py", "test_raycam.py", "test_tracker.py",
+              "test_randomize.py", "test_peer_dm_control.py")
 """Files whose tests compile environments, train, or drive a browser (each over 14 s of test time on 2 cores,
 `--durations=0`, 2026-12-04): every test in them is marked `slow`. `pytest -m "not slow"` is the fast tier for
 development (every module still imported by tests/test_layers.py); the full suite runs everything."""

@@ -87,6 +87,8 @@ CASES = {
     "bench navigate: a broken scene": (["bench", "navigate", "--scenes", "{d}"], "cannot load scene"),
     "bench navigate: zero seeds": (["bench", "navigate", "--scenes", "{d}", "--seeds", "0"], "between 1"),
     "bench soak: unknown task": (["bench", "soak", "--tasks", "nope"], "unknown task"),
+    "bench physics: unknown task": (["bench", "physics", "nope"], "unknown task"),
+    "bench physics: unknown variant": (["bench", "physics", "go1-flat", "--variants", "rk4"], "unknown physics variant"),
     "bench soak: absurd steps": (["bench", "soak", "--steps", "1e99"], "whole number"),
     "train: no task": (["train"], "name a task"),
     "train: unknown task": (["train", "nope", "--run-dir", "{d}/t1"], "unknown task"),

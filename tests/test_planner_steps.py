@@ -9,6 +9,7 @@ import pytest
 from legged.robots import GO1
 from planners import BodyChecker, HeightMaps, PlannerConfig, PlanningError, plan_path
 from planners.body_check import BodyCheckConfig, step_walls, widest_band
+from planners.body_planner import turn_speeds
 
 RES = 0.05
 
@@ -116,3 +117,36 @@ def test_a_plan_slows_where_the_body_must_crouch():
     assert _plan(maps).speeds is None  # no crouch speed, no limits of the plan's own
     with pytest.raises(PlanningError, match="crouch_speed"):
         PlannerConfig(crouch_speed=0.0).validate()
+
+
+def test_turn_limits_follow_the_curvature_and_hold_through_the_turn():
+    # an L: 0.5 m east, then a right angle north; a straight run; a 45-degree kink between 1 m segments
+    path = np.array([[0, 0], [0.5, 0], [0.5, 0.5], [0.5, 1.0], [0.5, 1.5], [1.2071, 2.2071]], float)
+    path = np.concatenate([path, np.zeros((len(path), 4))], axis=1)
+    limits = turn_speeds(path, accel=1.0)
+    assert np.isinf(limits[0]) and np.isinf(limits[3])  # the start; a waypoint after straight segments
+    assert limits[1] == pytest.approx(np.sqrt(0.5 / (np.pi / 2)))  # 90 degrees over 0.5 m segments
+    assert limits[2] == pytest.approx(limits[1])  # the limit holds as the body leaves the turn
+    kink = np.sqrt(0.5 * (0.5 + 1.0) / (np.pi / 4))
+    assert limits[4] == pytest.approx(kink, rel=1e-3) and limits[5] == pytest.approx(kink, rel=1e-3)
+    assert np.all(np.isinf(turn_speeds(path[:2], 1.0)))  # two waypoints: no turn
+    assert turn_speeds(path, accel=4.0)[1] == pytest.approx(2 * limits[1])  # four times the grip, twice the speed
+
+
+def test_a_plan_slows_in_its_turns_and_the_limits_combine():
+    maps = _corridor()
+    block = maps.floor.copy()
+    xs = maps.origin[0] + RES * np.arange(block.shape[0])
+    ys = maps.origin[1] + RES * np.arange(block.shape[1])
+    block[np.ix_(np.abs(xs) < 0.2, ys > -0.1)] = maps.ceiling.max()  # a side block: the path swerves round it
+    swerve = HeightMaps(floor=block, ceiling=maps.ceiling, resolution=RES, origin=maps.origin)
+    plan = plan_path(swerve, (-1.5, 0.0, 0.27), (1.5, 0.0, 0.27), GO1,
+                     PlannerConfig(planner="lattice", spacing=0.2, turn_accel=1.0))
+    limited = ~np.isnan(plan.speeds)
+    assert limited.any() and np.all(plan.speeds[limited] > 0)
+    np.testing.assert_allclose(plan.speeds, np.where(limited, turn_speeds(plan.waypoints, 1.0), np.nan))
+    both = plan_path(swerve, (-1.5, 0.0, 0.27), (1.5, 0.0, 0.27), GO1,
+                     PlannerConfig(planner="lattice", spacing=0.2, turn_accel=1.0, crouch_speed=0.01))
+    assert np.nanmin(both.speeds) <= np.nanmin(plan.speeds)
+    with pytest.raises(PlanningError, match="turn_accel"):
+        PlannerConfig(turn_accel=-1.0).validate()

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from legged.envs.config import NoiseConfig
+from legged.envs.native import NativeEnvs
 from legged.envs.physics import PhysicsView, view_of_mjx
 from legged.tasks import make
 from legged.soccer import observe
@@ -375,12 +376,14 @@ def test_estimate_noise_blurs_only_the_deployable_game_features(game):
         SoccerConfig(estimate_noise=EstimateNoise(correlation_s=0.0))
     env = SoccerEnv(SoccerConfig(estimate_noise=EstimateNoise(enabled=True, sight=True)))
     keys = jax.random.split(jax.random.PRNGKey(3), 2)
-    step = jax.jit(jax.vmap(env.step))  # the clean game: the module's soccer-1v1 (SoccerConfig's defaults)
-    state, clean = jax.jit(jax.vmap(env.reset))(keys), game.reset(keys)
+    # both games in the native engine (what the noise is checked against is the same game's truth, not MJX's):
+    # the clean one is the module's soccer-1v1 (SoccerConfig's defaults)
+    noisy_game, clean_game = NativeEnvs(env, 2, threads=1), NativeEnvs(game.env, 2, threads=1)
+    state, clean = noisy_game.reset(keys), clean_game.reset(keys)
     assert "ball_sighting" not in clean.info  # kept for estimate_noise.sight only
     for _ in range(2):
         zeros = jnp.zeros((2, env.n_agents, env.action_size))
-        state, clean = step(state, zeros), game.step(clean, zeros)
+        state, clean = noisy_game.step(state, zeros), clean_game.step(clean, zeros)
     size = env.policy_state_size
     np.testing.assert_allclose(state.obs["privileged_state"], clean.obs["privileged_state"], atol=1e-6)  # same game
     noisy, truth = state.obs["state"], state.obs["privileged_state"][..., :size]

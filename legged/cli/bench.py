@@ -1,5 +1,5 @@
-"""The command line's benchmarks: `legged bench env|train|soak|soccer|encoder` (and `bench plan` and `bench navigate`,
-from legged.cli.nav)."""
+"""The command line's benchmarks: `legged bench env|train|physics|soak|soccer|encoder` (and `bench plan` and
+`bench navigate`, from legged.cli.nav)."""
 
 from __future__ import annotations
 
@@ -75,6 +75,17 @@ def cmd_bench_train(args) -> int:
     return _print_records(records, args.json, print_train_table)
 
 
+def cmd_bench_physics(args) -> int:
+    """`legged bench physics`: the cost of each physics setting of a task's model, side by side."""
+    from legged.physics_cost import bench_physics, print_cost_table, variants_named
+
+    variants = variants_named(args.variants)  # unknown names -> one clear line before anything is built
+    progress = None if args.quiet else (lambda msg: print(f"[bench] {msg}", file=sys.stderr, flush=True))
+    records = bench_physics(args.task, variants, progress, batch=args.batch, threads=args.threads,
+                            seconds=args.seconds, repeats=args.repeats, seed=args.seed)
+    return _print_records(records, args.json, print_cost_table)
+
+
 def cmd_bench_soccer(args) -> int:
     """`legged bench soccer`: soccer env steps per second beside the peers."""
     from legged.soccer.bench import bench_soccer, print_soccer_table
@@ -133,6 +144,22 @@ def add_bench_commands(sub) -> None:
     bt.add_argument("--json", action="store_true", help="print a JSON list, one object per task")
     bt.add_argument("--quiet", action="store_true", help="no progress messages")
     bt.set_defaults(fn=cmd_bench_train)
+    bp = bsub.add_parser("physics", help="what each physics setting costs: a task's model as it trains and with one "
+                                         "setting changed at a time (solver, iterations, cone, condim, ...)")
+    bp.add_argument("task", type=task_names, help="comma-separated tasks, measured one after the other")
+    bp.add_argument("--variants", type=lambda s: [v for v in s.split(",") if v], default=None,
+                    help="comma-separated variants (default: all; as-trained always measured): as-trained, cg, pgs, "
+                         "iterations-1, other-cone, condim-3, no-frictionloss, no-eulerdamp, sparse-jacobian")
+    bp.add_argument("--batch", type=bounded(int, 1, 65536), default=1024, help="simulations stepped together")
+    bp.add_argument("--threads", type=bounded(int, 1, 1024), default=2, help="threads of the C engine")
+    bp.add_argument("--seconds", type=bounded(float, 0.1, 3600.0), default=5.0,
+                    help="timed seconds per variant and round")
+    bp.add_argument("--repeats", type=bounded(int, 1, 100), default=3,
+                    help="rounds, the variants interleaved in each; each figure is the median round's")
+    bp.add_argument("--seed", type=SEED, default=0)
+    bp.add_argument("--json", action="store_true", help="print a JSON list, one object per task and variant")
+    bp.add_argument("--quiet", action="store_true", help="no progress messages")
+    bp.set_defaults(fn=cmd_bench_physics)
     sk = bsub.add_parser("soak", help="random and extreme actions under randomisation: non-finite values and "
                                       "divergences that reach the learner")
     sk.add_argument("--tasks", type=task_names, default=["confined-waypoints", "soccer-1v1"],

@@ -52,7 +52,7 @@ def _planner_config(args):
 
     config = PlannerConfig(planner=args.planner, time_limit=args.time_limit, seed=args.planner_seed,
                            spacing=args.spacing, space=args.space, max_checks=args.max_checks,
-                           crouch_speed=args.crouch_speed)
+                           crouch_speed=args.crouch_speed, turn_accel=args.turn_accel)
     config.validate()
     return config
 
@@ -160,6 +160,9 @@ def _add_planner_options(parser) -> None:
     parser.add_argument("--planner-seed", type=SEED, default=0, help="seed of OMPL's sampling")
     parser.add_argument("--crouch-speed", type=bounded(float, 0.0, 10.0), default=None, metavar="M/S",
                         help="speed limit of the plan where the body must crouch (under bars and low roofs)")
+    parser.add_argument("--turn-accel", type=bounded(float, 0.0, 100.0), default=None, metavar="M/S2",
+                        help="largest sideways acceleration the plan asks for in its turns: where the path turns, the "
+                             "speed limit is sqrt(this / curvature)")
 
 
 SHIPPED_FOLLOWER = "assets/policies/go1-confined-follower"

@@ -1,0 +1,69 @@
+"""`legged bench physics`'s pieces: each variant changes what it names on a copy of the model, and a variant's cost
+is measured from the same states under the same controls. (Its figures are measured, not asserted:
+assets/benchmarks/.)"""
+
+import mujoco
+import numpy as np
+import pytest
+
+from legged.bench import physics_profile
+from legged.physics_cost import AS_TRAINED, VARIANTS, _time_variant, variant_model, variants_named
+
+BOX = """<mujoco><option cone="pyramidal"/><worldbody><geom type="plane" size="1 1 0.1"/>
+<body pos="0 0 0.099"><freejoint/><geom type="box" size="0.1 0.1 0.1" condim="6"/>
+<body pos="0 0 0.2"><joint type="hinge" damping="0.5" frictionloss="0.2"/><geom size="0.05"/></body></body>
+</worldbody><actuator><position joint="" kp="1"/></actuator></mujoco>""".replace('joint=""', 'joint="hinge"').replace(
+    '<joint type="hinge"', '<joint name="hinge" type="hinge"')
+
+
+def named(name):
+    return next(v for v in VARIANTS if v.name == name)
+
+
+@pytest.fixture
+def model():
+    return mujoco.MjModel.from_xml_string(BOX)
+
+
+def test_each_variant_changes_a_copy_as_it_says(model):
+    edited = {v.name: variant_model(model, v) for v in VARIANTS}
+    assert model.opt.solver == mujoco.mjtSolver.mjSOL_NEWTON and model.geom_condim.max() == 6  # untouched
+    assert model.dof_frictionloss.max() == pytest.approx(0.2)
+    assert edited["cg"].opt.solver == mujoco.mjtSolver.mjSOL_CG
+    assert edited["pgs"].opt.solver == mujoco.mjtSolver.mjSOL_PGS
+    assert edited["iterations-1"].opt.iterations == 1 and edited["iterations-1"].opt.ls_iterations == 1
+    assert edited["other-cone"].opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+    assert variant_model(edited["other-cone"], named("other-cone")).opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL
+    assert edited["condim-3"].geom_condim.max() == 3
+    assert np.all(edited["no-frictionloss"].dof_frictionloss == 0)
+    assert edited["no-eulerdamp"].opt.disableflags & mujoco.mjtDisableBit.mjDSBL_EULERDAMP
+    assert edited["sparse-jacobian"].opt.jacobian == mujoco.mjtJacobian.mjJAC_SPARSE
+    assert all(getattr(edited["as-trained"].opt, f) == getattr(model.opt, f)
+               for f in ("solver", "iterations", "cone", "jacobian", "disableflags"))
+
+
+def test_variants_are_picked_by_name_with_the_model_as_trained_first():
+    picked = variants_named(["condim-3", "cg", "condim-3", "as-trained"])
+    assert [v.name for v in picked] == ["as-trained", "condim-3", "cg"] and picked[0] is AS_TRAINED
+    assert [v.name for v in variants_named(None)] == [v.name for v in VARIANTS]
+    with pytest.raises(ValueError, match="unknown physics variant.*rk4.*choose from as-trained"):
+        variants_named(["rk4"])
+
+
+def test_fewer_contact_dimensions_mean_fewer_constraint_rows(model):
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    rows = {v: physics_profile(variant_model(model, named(v)), [data], 1)
+            ["constraint_rows"] for v in ("as-trained", "condim-3", "no-frictionloss")}  # the first step: resting
+    # 4 box corners on the plane: pyramidal rows 2 (condim - 1) each; the hinge's dry friction one row
+    assert rows["as-trained"] == 4 * 10 + 1 and rows["condim-3"] == 4 * 4 + 1 and rows["no-frictionloss"] == 40
+
+
+def test_a_variant_is_timed_from_the_given_states_under_the_given_controls(model):
+    data = mujoco.MjData(model)
+    data.qpos[2] = 0.3  # dropped from 0.3 m
+    mujoco.mj_forward(model, data)
+    ctrls = [np.full((3, 1), 0.5), np.full((3, 1), -0.5)]
+    out = _time_variant(model, [data], ctrls, n_substeps=4, threads=1, seconds=0.05)
+    assert out["env_steps_per_s"] > 0 and out["finite"]
+    assert data.time == 0.0  # the state handed in is left as it was
