@@ -166,28 +166,40 @@ def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0
     return records
 
 
-def bench_peer(python: str, script: str | None, batches: list[int], seconds: float) -> dict[int, dict]:
-    """Run MuJoCo Playground's Go1 rough-terrain benchmark (legged/peers/playground.py, with the peer's
-    `python`) and index it by batch."""
+PEER_ENVS = {"go1-flat": "Go1JoystickFlatTerrain", "go1-rough": "Go1JoystickRoughTerrain"}
+"""The MuJoCo Playground environment each task is measured beside; other tasks (the confined ones) beside the rough
+joystick, the nearest Playground has."""
+
+
+def peer_env(task: str) -> str:
+    """The Playground environment `task` is compared with (PEER_ENVS)."""
+    return PEER_ENVS.get(task, "Go1JoystickRoughTerrain")
+
+
+def bench_peer(python: str, script: str | None, batches: list[int], seconds: float,
+               envs: tuple[str, ...] = ("Go1JoystickRoughTerrain",)) -> dict[tuple[str, int], dict]:
+    """Run MuJoCo Playground's Go1 environments `envs` (legged/peers/playground.py, with the peer's `python`) and
+    index them by (environment, batch)."""
     from pathlib import Path
 
     script = script or str(Path(__file__).with_name("peers") / "playground.py")
     if not Path(python).is_file():
         raise FileNotFoundError(f"peer python not found: {python} (build it with bash "
                                 f"{Path(__file__).with_name('peers') / 'setup_playground.sh'})")
-    cmd = [python, script, ",".join(map(str, batches)), "--envs", "Go1JoystickRoughTerrain",
+    cmd = [python, script, ",".join(map(str, batches)), "--envs", ",".join(dict.fromkeys(envs)),
            "--seconds", str(seconds)]
     out = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if out.returncode != 0:
         raise RuntimeError(f"peer benchmark failed ({' '.join(cmd)}):\n{out.stderr[-2000:]}")
     rows = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
-    return {r["batch"]: r for r in rows}
+    return {(r["env"], r["batch"]): r for r in rows}
 
 
-def attach_peer(records: list[dict], peer: dict[int, dict]) -> None:
-    """Add the peer's figure and our/peer ratio to each record measured at a batch the peer also ran."""
+def attach_peer(records: list[dict], peer: dict[tuple[str, int], dict]) -> None:
+    """Add the peer's figure and our/peer ratio to each MJX record whose task's peer environment (peer_env) ran at
+    its batch."""
     for r in records:
-        p = peer.get(r["batch"])
+        p = peer.get((peer_env(r["task"]), r["batch"]))
         if p and r.get("physics") == "mjx":
             r["peer"] = p["env"]
             r["peer_env_steps_per_s"] = p["env_steps_per_s"]

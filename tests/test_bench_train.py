@@ -6,7 +6,7 @@ measured, not asserted: assets/benchmarks/.)"""
 import mujoco
 import pytest
 
-from legged.bench import PROFILE_TIMERS, physics_profile
+from legged.bench import PROFILE_TIMERS, attach_peer, physics_profile
 from policies.bench_train import PARTS, loop_split
 
 
@@ -46,3 +46,16 @@ def test_the_profile_reads_mujocos_timers_and_constraint_counts():
     assert profile["contacts"] == 4.0 and profile["constraint_rows"] > 0 and profile["solver_iterations"] > 0
     assert all(profile[f"{t}_us"] >= 0 for t in PROFILE_TIMERS) and profile["step_us"] > 0
     assert profile["step_us"] >= profile["constraint_us"] and profile["solver"] == "mjSOL_NEWTON"
+
+
+def test_each_task_is_set_beside_its_own_playground_peer():
+    records = [{"task": t, "physics": p, "batch": 256, "env_steps_per_s": 3000.0}
+               for t in ("go1-flat", "go1-rough", "confined-waypoints") for p in ("mjx", "native")]
+    peer = {("Go1JoystickFlatTerrain", 256): {"env": "Go1JoystickFlatTerrain", "env_steps_per_s": 6000.0},
+            ("Go1JoystickRoughTerrain", 256): {"env": "Go1JoystickRoughTerrain", "env_steps_per_s": 2000.0}}
+    attach_peer(records, peer)
+    mjx = {r["task"]: r for r in records if r["physics"] == "mjx"}
+    assert mjx["go1-flat"]["peer"] == "Go1JoystickFlatTerrain" and mjx["go1-flat"]["ratio_vs_peer"] == 0.5
+    assert mjx["go1-rough"]["peer"] == "Go1JoystickRoughTerrain" and mjx["go1-rough"]["ratio_vs_peer"] == 1.5
+    assert mjx["confined-waypoints"]["peer"] == "Go1JoystickRoughTerrain"  # the nearest Playground has
+    assert not any("peer" in r for r in records if r["physics"] == "native")  # MJX beside MJX only

@@ -156,7 +156,8 @@ LEGGED_ORDER = [
     ("base", ("legged", "legged.files", "legged.robots", "legged.worlds", "legged.sensors", "legged.envs.math")),
     ("environments", ("legged.envs", "legged.soccer")),
     ("skills", ("legged.skills",)),
-    ("tasks", ("legged.tasks", "legged.bench", "legged.physics_cost", "legged.soccer.bench", "legged.soccer.parallel_env", "legged.peers")),
+    ("tasks", ("legged.tasks", "legged.bench", "legged.physics_cost", "legged.soccer.bench",
+               "legged.soccer.parallel_env", "legged.peers")),
     ("cli", ("legged.cli",)),
 ]
 """The groups of `legged`, lowest first: a module may import its own group and those before it. Each entry is a
@@ -167,7 +168,8 @@ layer) is in the base. Placed apart from their folders: legged.envs.math (rotati
 of the project, read by the sensors too) in the base; legged.soccer.bench
 (the soccer throughput benchmark, built on legged.bench) and legged.soccer.parallel_env (the PettingZoo adapter,
 which builds its game through the registry) with the tasks. Beside the registry sit the benchmarks built on it,
-legged/bench.py and legged/physics_cost.py, and legged/peers (MuJoCo Playground's timing script, run with the peer's own Python: it imports
+legged/bench.py and legged/physics_cost.py, and legged/peers (MuJoCo Playground's timing script, run with the peer's
+own Python: it imports
 nothing of legged)."""
 
 POLICIES_ORDER = [

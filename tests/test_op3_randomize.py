@@ -63,9 +63,16 @@ def test_each_robot_draws_its_own_within_the_ranges():
         np.testing.assert_array_equal(before[k], after[k])
 
 
-def test_both_engines_apply_the_same_fields_and_latency_delays_each_robot():
+@pytest.fixture(scope="module")
+def op3_game():
+    """The OP3-randomised 1v1 game and its jitted reset, traced once for the tests that read its first states."""
     env = SoccerEnv(SoccerConfig(randomization=OP3_RANDOMIZATION))
-    state = jax.jit(env.reset)(jax.random.PRNGKey(3))
+    return env, jax.jit(env.reset)
+
+
+def test_both_engines_apply_the_same_fields_and_latency_delays_each_robot(op3_game):
+    env, reset = op3_game
+    state = reset(jax.random.PRNGKey(3))
     dr = state.info["dr"]
     mjx_model = env.mjx_model_for(state.info)
     native = env.native_model_fields(jax.tree_util.tree_map(lambda x: np.asarray(x)[None], state.info), np.array([0]))
@@ -178,12 +185,12 @@ def test_the_soccer_servos_stay_on_their_motors_torque_speed_lines():
         assert np.all(torque <= upper + 1e-3) and np.all(torque >= lower - 1e-3)
 
 
-def test_the_critics_read_each_robots_drawn_model():
+def test_the_critics_read_each_robots_drawn_model(op3_game):
     """The privileged observation ends with each robot's drawn model values (none for a game without them)."""
     plain = SoccerEnv(SoccerConfig(randomization=SoccerRandomization(enabled=True)))
     assert plain.observation_layout()["privileged_state"][-1][0] == "truth"
-    env = SoccerEnv(SoccerConfig(randomization=OP3_RANDOMIZATION))
-    state = jax.jit(env.reset)(jax.random.PRNGKey(6))
+    env, reset = op3_game
+    state = reset(jax.random.PRNGKey(6))
     name, size = env.observation_layout()["privileged_state"][-1]
     assert name == "model_dynamics" and state.obs["privileged_state"].shape[1] == plain_size(plain) + size
     dr, tail = state.info["dr"], np.asarray(state.obs["privileged_state"][:, -size:])
@@ -196,9 +203,9 @@ def plain_size(env) -> int:
     return sum(k for _, k in env.observation_layout()["privileged_state"])
 
 
-def test_every_robot_is_pushed_at_the_push_steps():
-    env = SoccerEnv(SoccerConfig(randomization=OP3_RANDOMIZATION))
-    state = jax.jit(env.reset)(jax.random.PRNGKey(8))
+def test_every_robot_is_pushed_at_the_push_steps(op3_game):
+    env, reset = op3_game
+    state = reset(jax.random.PRNGKey(8))
     period = int(round(OP3_RANDOMIZATION.push_interval_s / env.dt))
     view = view_of_mjx(state.pipeline_state, jnp.zeros(0), False)
     for step, expect in ((period, True), (period + 1, False)):  # the step the transition has counted

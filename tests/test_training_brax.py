@@ -40,14 +40,16 @@ class SlidingBlockConfig:
 
 class SlidingBlock(Env):
     """A block on a line pushed by two actions, rewarded for staying near the origin. Like the tasks here it
-    counts its own steps in `info` and ends its episodes itself; its privileged state holds constant features
-    (as Go1's nominal dynamics parameters are)."""
+    counts its own steps in `info` and ends its episodes itself (at their time limit: `truncation`), hands a new
+    episode a carry (none) and its privileged state holds constant features (as Go1's nominal dynamics parameters
+    are); legged.envs.vector.VectorEnv's MJX engine runs it too (tests/test_training.py)."""
 
     config = SlidingBlockConfig()
 
-    def reset(self, rng):
+    def reset(self, rng, carry=None):
         position = jax.random.uniform(rng, (), minval=-1.0, maxval=1.0)
-        info = {"step": jnp.int32(0), "position": position, "velocity": jnp.float32(0.0)}
+        info = {"step": jnp.int32(0), "position": position, "velocity": jnp.float32(0.0),
+                "truncation": jnp.float32(0.0)}
         zero = jnp.float32(0.0)
         return State(None, self._obs(info), zero, zero, {"reward/position": zero}, info)
 
@@ -58,7 +60,12 @@ class SlidingBlock(Env):
         info = {**info, "step": info["step"] + 1, "position": position, "velocity": velocity}  # wrappers' keys kept
         reward = -jnp.square(position)
         done = (info["step"] >= self.config.episode_steps).astype(jnp.float32)
+        info["truncation"] = done  # its episodes end at their time limit only
         return State(None, self._obs(info), reward, done, {"reward/position": reward}, info)
+
+    def carry(self, info) -> dict:
+        """What a new episode inherits from the one before: nothing (the tasks' curriculum carry)."""
+        return {}
 
     @staticmethod
     def _obs(info) -> dict:

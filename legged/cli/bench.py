@@ -16,7 +16,7 @@ def _each_line(line):
 
 def cmd_bench(args) -> int:
     """`legged bench env`: environment steps per second, as JSON or a table."""
-    from legged.bench import attach_peer, bench_env, bench_peer, print_table
+    from legged.bench import attach_peer, bench_env, bench_peer, peer_env, print_table
     from legged.tasks import default_config
 
     for task in args.task:
@@ -28,7 +28,8 @@ def cmd_bench(args) -> int:
     if args.peer_python:
         if progress:
             progress("running the Playground peer in the same run")
-        attach_peer(records, bench_peer(args.peer_python, args.peer_script, args.batch, args.seconds))
+        attach_peer(records, bench_peer(args.peer_python, args.peer_script, args.batch, args.seconds,
+                                        tuple(peer_env(task) for task in args.task)))
     return _print_records(records, args.json, print_table)
 
 
@@ -118,7 +119,8 @@ def add_bench_commands(sub) -> None:
                     help="comma-separated: the task's default domain randomisation, or it on or off (on,off measures "
                          "its cost: ratio_vs_off)")
     be.add_argument("--peer-python", default=None,
-                    help="python of the MuJoCo Playground peer (../shared/peers); adds ratio_vs_peer")
+                    help="python of MuJoCo Playground's peer venv (bash legged/peers/setup_playground.sh builds it); "
+                         "adds ratio_vs_peer beside Playground's Go1 joystick, flat for go1-flat, rough otherwise")
     be.add_argument("--peer-script", default=None,
                     help="the peer's benchmark script (default: legged/peers/playground.py of this install)")
     be.add_argument("--json", action="store_true", help="print a JSON list, one object per batch size")
