@@ -115,7 +115,7 @@ def _controls(env, batch: int, seed: int, count: int = 8) -> list[np.ndarray]:
 def _time_variant(model, starts: list[mujoco.MjData], ctrls: list[np.ndarray], n_substeps: int, threads: int,
                   seconds: float) -> dict:
     """Control steps per second of `model` in a batch started from `starts` (cycled over the batch) under the
-    `ctrls` (cycled over the steps), and whether every simulation stayed finite without solver warnings."""
+    `ctrls` (cycled over the steps), and whether every simulation stayed finite."""
     batch = Batch(model, len(ctrls[0]), nthread=threads)
     rows = np.arange(batch.nsim) % len(starts)
     batch.bind("qpos")[:] = np.stack([d.qpos for d in starts])[rows]

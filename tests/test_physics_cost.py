@@ -11,9 +11,10 @@ from legged.physics_cost import AS_TRAINED, VARIANTS, _time_variant, variant_mod
 
 BOX = """<mujoco><option cone="pyramidal"/><worldbody><geom type="plane" size="1 1 0.1"/>
 <body pos="0 0 0.099"><freejoint/><geom type="box" size="0.1 0.1 0.1" condim="6"/>
-<body pos="0 0 0.2"><joint type="hinge" damping="0.5" frictionloss="0.2"/><geom size="0.05"/></body></body>
-</worldbody><actuator><position joint="" kp="1"/></actuator></mujoco>""".replace('joint=""', 'joint="hinge"').replace(
-    '<joint type="hinge"', '<joint name="hinge" type="hinge"')
+<body pos="0 0 0.2"><joint name="hinge" type="hinge" damping="0.5" frictionloss="0.2"/><geom size="0.05"/></body>
+</body></worldbody><actuator><position joint="hinge" kp="1"/></actuator></mujoco>"""
+"""A box resting on a plane (4 corner contacts of 6 dimensions) carrying a ball on a hinge with damping and dry
+friction."""
 
 
 def named(name):
