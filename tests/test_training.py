@@ -44,8 +44,9 @@ def torch_threads_kept():
 def trained_run(tiny_env, tmp_path_factory):
     """A run killed after its second report (checkpoint 1 only), then resumed to 120 steps. In native physics:
     the run directory and its resume do not depend on the engine, and an MJX training program would be
-    the suite's costliest compilation (12 minutes on a slow 2-core machine); the MJX engine of the same
-    VectorEnv is checked by the evaluation below and by the Brax run (tests/test_training_brax.py)."""
+    the suite's costliest compilation (12 minutes on a slow 2-core machine); VectorEnv's MJX engine is checked on a
+    pure-JAX task below (test_mjx_evaluation_...) and by the Brax run (tests/test_training_brax.py), the two engines'
+    agreement on go1-flat in tests/test_mjx_vs_native.py and tests/test_mjx_randomized.py."""
     run_dir = tmp_path_factory.mktemp("runs") / "tiny"
     patch = pytest.MonkeyPatch()
     patch.setattr(training, "build_env", lambda config: tiny_env)
