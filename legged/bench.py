@@ -6,9 +6,12 @@ from __future__ import annotations
 import copy
 import dataclasses
 import json
+import os
+import platform
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
@@ -81,6 +84,23 @@ def bench_rollout(env, batch: int, seconds: float, seed: int, threads: int) -> d
         physics.batch.step(nstep=physics.n_substeps)
         steps += 1
     return {"env_steps_per_s": round(steps * batch / (time.perf_counter() - t0), 1), "compile_s": 0.0}
+
+
+def cpu_model() -> str:
+    """The CPU's model name (from /proc/cpuinfo where there is one)."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def machine() -> dict:
+    """The CPU model and the cores this process may use, for a benchmark's record."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return {"cpu": cpu_model(), "cores": cores}
 
 
 def mid_episode_states(env, count: int = 8, seed: int = 0, steps: int = 50) -> list[mujoco.MjData]:
@@ -180,8 +200,6 @@ def bench_peer(python: str, script: str | None, batches: list[int], seconds: flo
                envs: tuple[str, ...] = ("Go1JoystickRoughTerrain",)) -> dict[tuple[str, int], dict]:
     """Run MuJoCo Playground's Go1 environments `envs` (legged/peers/playground.py, with the peer's `python`) and
     index them by (environment, batch)."""
-    from pathlib import Path
-
     script = script or str(Path(__file__).with_name("peers") / "playground.py")
     if not Path(python).is_file():
         raise FileNotFoundError(f"peer python not found: {python} (build it with bash "

@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 from mujoco.batch import Batch
 
-from legged.bench import mid_episode_states, physics_profile
+from legged.bench import machine, mid_episode_states, physics_profile
 from legged.envs.native import NativeEnvs, check_threads
 from legged.tasks import learner_env, make, task_entry
 
@@ -171,7 +171,7 @@ def physics_cost(env, batch: int = 1024, threads: int = 2, seconds: float = 5.0,
                         "physics_steps_per_s": round(median * env.config.n_substeps, 1),
                         "ratio_vs_as_trained": round(median / reference, 3),
                         "rounds": [round(s, 1) for s in speeds[v.name]], "finite": finite[v.name],
-                        "profile": physics_profile(model, datas, profile_steps)})
+                        "profile": physics_profile(model, datas, profile_steps), **machine()})
     return records
 
 

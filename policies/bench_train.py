@@ -11,12 +11,10 @@ timers profile a physics step from the states the run ended in.
 
 from __future__ import annotations
 
-import os
-import platform
 import tempfile
 from pathlib import Path
 
-from legged.bench import bench_rollout, mid_episode_states, physics_profile
+from legged.bench import bench_rollout, machine, mid_episode_states, physics_profile
 from policies.config import TrainConfig, apply_overrides
 from policies.environments import build_env
 from policies.run_dir import RunDir
@@ -24,17 +22,6 @@ from policies.training import start_run
 
 PARTS = ("physics", "env", "policy", "update", "saving")
 """The parts of an iteration's wall time, as the loop records them (`time_<part>_s`)."""
-
-
-def cpu_model() -> str:
-    """The CPU's model name (from /proc/cpuinfo where there is one)."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def loop_split(records: list[dict], warmup: int, per_iteration: int) -> dict:
@@ -85,8 +72,7 @@ def bench_train(task: str, iterations: int = 10, num_envs: int = 1024, threads: 
         say(f"{task}: MuJoCo's timers over {profile_steps} physics steps of 8 states")
         record["physics_profile"] = physics_profile(env.native_model(), mid_episode_states(env, 8, seed),
                                                     profile_steps)
-    record.update(cpu=cpu_model(), cores=len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else
-                  os.cpu_count())
+    record.update(machine())
     return record
 
 
