@@ -70,20 +70,39 @@ def bench_vector(env, physics: str, batch: int, seconds: float, seed: int, threa
             "diverged_fraction": None if diverged is None else round(float(jnp.mean(diverged)), 4)}
 
 
+def random_controls(native: NativeEnvs, state, seed: int) -> list[np.ndarray]:
+    """The servo targets (actuator controls) of a few fixed random action batches for the simulations of `native`
+    at `state`, as the task's servos turn actions into them (a latency schedule: its targets)."""
+    ctrls = [np.asarray(native.controls(state, a)) for a in _random_actions(native.env, native.num_envs, seed)]
+    return [c[:, -1] if c.ndim == 3 else c for c in ctrls]
+
+
+def step_rate(batch, ctrls: list[np.ndarray], n_substeps: int, seconds: float) -> float:
+    """Control steps per second, all simulations counted, of a `mujoco.batch.Batch` stepped `n_substeps` physics
+    steps at a time for `seconds`, the `ctrls` cycled over the control steps."""
+    ctrl, steps, t0 = batch.bind("ctrl"), 0, time.perf_counter()
+    while time.perf_counter() - t0 < seconds:
+        ctrl[:] = ctrls[steps % len(ctrls)]
+        batch.step(nstep=n_substeps)
+        steps += 1
+    return steps * batch.nsim / (time.perf_counter() - t0)
+
+
 def bench_rollout(env, batch: int, seconds: float, seed: int, threads: int) -> dict:
     """Control steps per second of bare native physics: the task's model and spawns, random PD targets,
     `n_substeps` substeps per control step, nothing else."""
     native = NativeEnvs(env, batch, threads)
-    state = native.reset(jax.random.split(jax.random.PRNGKey(seed), batch))
-    ctrls = [np.asarray(native.controls(state, a)) for a in _random_actions(env, batch, seed)]
-    ctrls = [c[:, -1] if c.ndim == 3 else c for c in ctrls]  # a latency schedule: its targets
-    physics, steps, t0 = native.physics, 0, time.perf_counter()
-    ctrl = physics.batch.bind("ctrl")
-    while time.perf_counter() - t0 < seconds:
-        ctrl[:] = ctrls[steps % len(ctrls)]
-        physics.batch.step(nstep=physics.n_substeps)
-        steps += 1
-    return {"env_steps_per_s": round(steps * batch / (time.perf_counter() - t0), 1), "compile_s": 0.0}
+    ctrls = random_controls(native, native.reset(jax.random.split(jax.random.PRNGKey(seed), batch)), seed)
+    rate = step_rate(native.physics.batch, ctrls, native.physics.n_substeps, seconds)
+    return {"env_steps_per_s": round(rate, 1), "compile_s": 0.0}
+
+
+def randomized(entry, enabled: bool | None):
+    """The task's default config with its domain randomisation on or off (None: as the task has it)."""
+    if enabled is None:
+        return entry.config
+    return dataclasses.replace(entry.config, randomization=dataclasses.replace(entry.config.randomization,
+                                                                               enabled=enabled))
 
 
 def cpu_model() -> str:
@@ -158,11 +177,7 @@ def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0
     threads = check_threads(threads)
     records, runs = [], {}
     for setting in randomize:
-        config = entry.config
-        if setting != "default":
-            config = dataclasses.replace(config, randomization=dataclasses.replace(config.randomization,
-                                                                                  enabled=setting == "on"))
-        env = learner_env(entry, make(task, config))
+        env = learner_env(entry, make(task, randomized(entry, None if setting == "default" else setting == "on")))
         for batch in batches:
             by_physics = {}
             for p in physics:
@@ -242,9 +257,7 @@ def soak(task: str, steps: int, batch: int = 256, seed: int = 0, physics: str = 
     (observations and rewards after auto-reset), the episodes ended by divergence, and all episodes."""
     entry = task_entry(task)
     entry.check(physics=physics)
-    config = dataclasses.replace(entry.config, randomization=dataclasses.replace(entry.config.randomization,
-                                                                                  enabled=True))
-    env = learner_env(entry, make(task, config))
+    env = learner_env(entry, make(task, randomized(entry, True)))
     vector = VectorEnv(env, batch, physics, threads)
     rng = np.random.default_rng(seed)
     clip = float(env.config.action_clip)

@@ -12,16 +12,14 @@ from __future__ import annotations
 import copy
 import dataclasses
 import statistics
-import time
 from typing import Callable
 
 import jax
-import jax.numpy as jnp
 import mujoco
 import numpy as np
 from mujoco.batch import Batch
 
-from legged.bench import machine, mid_episode_states, physics_profile
+from legged.bench import machine, mid_episode_states, physics_profile, random_controls, randomized, step_rate
 from legged.envs.native import NativeEnvs, check_threads
 from legged.tasks import learner_env, make, task_entry
 
@@ -99,36 +97,17 @@ def variant_model(model: mujoco.MjModel, variant: Variant) -> mujoco.MjModel:
     return out
 
 
-def _controls(env, batch: int, seed: int, count: int = 8) -> list[np.ndarray]:
-    """Controls of `count` random actions for `batch` simulations, as the task's servos turn actions into them."""
-    native = NativeEnvs(env, batch, threads=1)
-    state = native.reset(jax.random.split(jax.random.PRNGKey(seed), batch))
-    rng = np.random.default_rng(seed)
-    out = []
-    for _ in range(count):
-        ctrl = np.asarray(native.controls(state, jnp.asarray(rng.uniform(-1, 1, (batch, env.action_size)),
-                                                             jnp.float32)))
-        out.append(ctrl[:, -1] if ctrl.ndim == 3 else ctrl)  # a latency schedule: its targets
-    return out
-
-
 def _time_variant(model, starts: list[mujoco.MjData], ctrls: list[np.ndarray], n_substeps: int, threads: int,
                   seconds: float) -> dict:
     """Control steps per second of `model` in a batch started from `starts` (cycled over the batch) under the
-    `ctrls` (cycled over the steps), and whether every simulation stayed finite."""
+    `ctrls` (cycled over the steps; legged.bench.step_rate), and whether every simulation stayed finite."""
     batch = Batch(model, len(ctrls[0]), nthread=threads)
     rows = np.arange(batch.nsim) % len(starts)
     batch.bind("qpos")[:] = np.stack([d.qpos for d in starts])[rows]
     batch.bind("qvel")[:] = np.stack([d.qvel for d in starts])[rows]
     batch.forward()
-    ctrl, steps, t0 = batch.bind("ctrl"), 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds:
-        ctrl[:] = ctrls[steps % len(ctrls)]
-        batch.step(nstep=n_substeps)
-        steps += 1
-    elapsed = time.perf_counter() - t0
-    qpos = batch.bind("qpos")
-    return {"env_steps_per_s": steps * batch.nsim / elapsed, "finite": bool(np.isfinite(qpos).all())}
+    rate = step_rate(batch, ctrls, n_substeps, seconds)
+    return {"env_steps_per_s": rate, "finite": bool(np.isfinite(batch.bind("qpos")).all())}
 
 
 def physics_cost(env, batch: int = 1024, threads: int = 2, seconds: float = 5.0, repeats: int = 3, seed: int = 0,
@@ -146,7 +125,8 @@ def physics_cost(env, batch: int = 1024, threads: int = 2, seconds: float = 5.0,
     say = progress or (lambda msg: None)
     base = env.native_model()
     starts = mid_episode_states(env, 8, seed)
-    ctrls = _controls(env, batch, seed)
+    native = NativeEnvs(env, batch, threads=1)
+    ctrls = random_controls(native, native.reset(jax.random.split(jax.random.PRNGKey(seed), batch)), seed)
     models = [variant_model(base, v) for v in variants]
     speeds = {v.name: [] for v in variants}
     finite = {v.name: True for v in variants}
@@ -181,9 +161,7 @@ def bench_physics(tasks: list[str], variants: list[Variant] | None = None, progr
     records = []
     for task in tasks:
         entry = task_entry(task)
-        config = dataclasses.replace(entry.config, randomization=dataclasses.replace(entry.config.randomization,
-                                                                                      enabled=False))
-        env = learner_env(entry, make(task, config))
+        env = learner_env(entry, make(task, randomized(entry, False)))
         say = progress and (lambda msg, t=task: progress(f"{t}: {msg}"))
         records += [{"task": task, **r} for r in physics_cost(env, variants=variants, progress=say, **kwargs)]
     return records
