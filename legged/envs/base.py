@@ -25,7 +25,7 @@ from legged.envs.contacts import MjxContactReader
 from legged.envs.physics import PhysicsView, Spawn
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
 from legged.envs.motor import motor_limits, servo_gains, within_motor_curve
-from legged.envs.rewards import penalty_terms
+from legged.envs.rewards import penalty_terms, step_reward
 from legged.envs.randomize import (CONE_DR, MODEL_DR, check_latency, draw, late_controls, mjx_fields,
                                    randomized_fields)
 from legged.robots.models import mjx_model_of, robot_model
@@ -324,9 +324,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
         time_out = (info["step"] >= cfg.episode_steps) | self._task_truncated(data, info)
         failed = self._task_failed(data, info)
         done = fell | failed | success | time_out | bad
-        reward = sum(terms.values())
-        if cfg.only_positive_rewards:
-            reward = jnp.maximum(reward, 0.0)
+        reward = step_reward(terms, fell | failed, cfg.only_positive_rewards, cfg.failure_penalty)
         reward = jnp.where(bad, 0.0, reward)
         ended_well = (time_out | success) if self.success_is_truncation else (time_out & ~success)
         info["truncation"] = (ended_well & ~fell & ~failed & ~bad).astype(jnp.float32)

@@ -130,6 +130,9 @@ class EnvConfig:
     only_positive_rewards: bool = False
     """Clip each step's total reward at 0 (legged_gym's rule): then an early fall can never pay by ending
     a stream of penalties, and the penalties still shape what the policy does while it earns reward."""
+    failure_penalty: float = 0.0
+    """Reward added once, on the step an episode ends in a fall or the task's failure (the follower stalled out):
+    <= 0, added after the clip of only_positive_rewards, so a failure costs this on top of the reward it forgoes."""
     randomization: RandomizationConfig = RandomizationConfig()
     """Domain randomisation (the Go1 tasks turn it on, with the ranges that cover the reference models: COVERING)."""
     noise: NoiseConfig = NoiseConfig()
@@ -157,6 +160,10 @@ class EnvConfig:
     """When > 0, `state` also holds the joint angles, joint velocities and actions of the last this many control
     steps as they were observed (oldest first): enough memory for a plain MLP policy to tell the robot's joint
     damping, friction and latency apart, which a memoryless one cannot (0: none)."""
+
+    def __post_init__(self):
+        if not self.failure_penalty <= 0.0:  # NaN fails here too
+            raise ValueError(f"failure_penalty must be a number <= 0 (a cost), got {self.failure_penalty!r}")
 
     @property
     def n_substeps(self) -> int:

@@ -131,6 +131,7 @@ class ConfinedConfig(EnvConfig):
     """Observation noise on `state` (on)."""
 
     def __post_init__(self):
+        super().__post_init__()
         if not 0.0 < self.max_speed <= math.inf:  # NaN fails here too
             raise ValueError(f"max_speed (the speed limit) must be a positive number of m/s, got {self.max_speed!r}")
         if not self.stall_timeout_s > 0.0:  # NaN fails here too

@@ -27,6 +27,19 @@ def penalty_terms(scales, q, q_range, qd, last_qvel, dt, torque, action, last_ac
     }
 
 
+def step_reward(terms: dict, ended_in_failure, only_positive: bool, failure_penalty: float):
+    """A step's reward from its named `terms`: their sum, clipped at 0 when `only_positive`, plus `failure_penalty`
+    where the episode ends in failure (a fall, the task's failure). Adds that penalty to `terms` as "failure" when it
+    is not 0, so it is logged like the others."""
+    reward = sum(terms.values())
+    if only_positive:
+        reward = jnp.maximum(reward, 0.0)
+    if failure_penalty:
+        terms["failure"] = failure_penalty * jnp.asarray(ended_in_failure, jnp.float32)
+        reward = reward + terms["failure"]
+    return reward
+
+
 def wrap_angle(angle):
     """Angle wrapped to (-pi, pi]."""
     return jnp.arctan2(jnp.sin(angle), jnp.cos(angle))
