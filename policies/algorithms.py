@@ -119,7 +119,8 @@ def ppo_train_cfg(config: TrainConfig, camera: bool = False, multi_gpu: dict | N
                       ppo.num_learning_epochs, "num_mini_batches": ppo.num_mini_batches, "clip_param":
                       ppo.clip_param, "gamma": ppo.gamma, "lam": ppo.lam, "entropy_coef": ppo.entropy_coef,
                       "value_loss_coef": ppo.value_loss_coef, "desired_kl": ppo.desired_kl,
-                      "max_grad_norm": ppo.max_grad_norm, "schedule": ppo.schedule},
+                      "max_grad_norm": ppo.max_grad_norm, "schedule": ppo.schedule,
+                      "use_mixed_precision": ppo.mixed_precision},
         "actor": actor_model(config, ppo.init_noise_std, camera),
         "critic": critic_model(config),
         "obs_groups": {"actor": actor, "critic": critic},

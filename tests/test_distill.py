@@ -139,6 +139,30 @@ def test_ppo_algorithms_update_on_synthetic_rollouts(algo):
     assert torch.allclose(deployed(*inputs), alg.get_policy()(obs), atol=1e-5)  # the mean z at deployment
 
 
+def test_mixed_precision_runs_the_update_in_bfloat16():
+    """ppo.mixed_precision reaches rsl-rl: the update's forward passes run in bfloat16 and still learn."""
+    cfg = apply_overrides(config("ppo"), ["ppo.mixed_precision=true"])
+    rng, n = np.random.default_rng(5), 8
+    alg = build_algorithm(cfg, observations(n, rng), n, 12, "cpu")
+    assert alg.use_mixed_precision
+    dtypes = []
+    alg.actor.mlp.register_forward_hook(lambda module, args, out: dtypes.append(out.dtype))
+    alg.train_mode()
+    for _ in range(cfg.ppo.num_steps_per_env):
+        alg.act(observations(n, rng))
+        alg.process_env_step(observations(n, rng), torch.ones(n), torch.zeros(n, dtype=torch.long), {})
+    alg.compute_returns(observations(n, rng))
+    before = [p.clone() for p in alg.actor.parameters()]
+    dtypes.clear()
+    losses = alg.update()
+    assert dtypes and set(dtypes) == {torch.bfloat16}  # every forward pass of the update
+    assert all(np.isfinite(v) for v in losses.values())
+    assert any(not torch.equal(a, b) for a, b in zip(before, alg.actor.parameters()))
+    assert all(p.dtype == torch.float32 for p in alg.actor.parameters())  # the weights stay float32
+    with pytest.raises(ConfigError, match="mixed_precision is for --backend rsl"):
+        apply_overrides(TrainConfig(task="go1-flat", backend="brax").resolved(), ["ppo.mixed_precision=true"])
+
+
 @pytest.fixture(scope="module")
 def teacher_run(tmp_path_factory):
     """An (untrained) teacher run directory: config and one checkpoint."""
