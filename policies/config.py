@@ -43,7 +43,8 @@ class PPOConfig:
     """Gradient clipping norm."""
     mixed_precision: bool = False
     """rsl backend: run the update's forward passes and losses in bfloat16 (torch autocast; rsl-rl's
-    use_mixed_precision), which CPUs with bf16 matrix units (AMX, AVX512-BF16) multiply several times faster."""
+    use_mixed_precision), which CPUs with bf16 matrix units (AMX, AVX512-BF16) multiply several times faster; it
+    learned go1-flat more slowly per step than float32 (docs/training.md)."""
     actor_hidden: tuple[int, ...] = (512, 256, 128)
     """Actor MLP layer sizes (reads `state`)."""
     critic_hidden: tuple[int, ...] = (512, 256, 128)
