@@ -70,9 +70,10 @@ def bench_vector(env, physics: str, batch: int, seconds: float, seed: int, threa
             "diverged_fraction": None if diverged is None else round(float(jnp.mean(diverged)), 4)}
 
 
-def random_controls(native: NativeEnvs, state, seed: int) -> list[np.ndarray]:
-    """The servo targets (actuator controls) of a few fixed random action batches for the simulations of `native`
-    at `state`, as the task's servos turn actions into them (a latency schedule: its targets)."""
+def random_controls(native: NativeEnvs, seed: int) -> list[np.ndarray]:
+    """The servo targets (actuator controls) of a few fixed random action batches for the simulations of `native`,
+    reset with `seed`, as the task's servos turn actions into them (a latency schedule: its targets)."""
+    state = native.reset(jax.random.split(jax.random.PRNGKey(seed), native.num_envs))
     ctrls = [np.asarray(native.controls(state, a)) for a in _random_actions(native.env, native.num_envs, seed)]
     return [c[:, -1] if c.ndim == 3 else c for c in ctrls]
 
@@ -92,7 +93,7 @@ def bench_rollout(env, batch: int, seconds: float, seed: int, threads: int) -> d
     """Control steps per second of bare native physics: the task's model and spawns, random PD targets,
     `n_substeps` substeps per control step, nothing else."""
     native = NativeEnvs(env, batch, threads)
-    ctrls = random_controls(native, native.reset(jax.random.split(jax.random.PRNGKey(seed), batch)), seed)
+    ctrls = random_controls(native, seed)
     rate = step_rate(native.physics.batch, ctrls, native.physics.n_substeps, seconds)
     return {"env_steps_per_s": round(rate, 1), "compile_s": 0.0}
 

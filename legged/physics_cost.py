@@ -14,7 +14,6 @@ import dataclasses
 import statistics
 from typing import Callable
 
-import jax
 import mujoco
 import numpy as np
 from mujoco.batch import Batch
@@ -125,8 +124,7 @@ def physics_cost(env, batch: int = 1024, threads: int = 2, seconds: float = 5.0,
     say = progress or (lambda msg: None)
     base = env.native_model()
     starts = mid_episode_states(env, 8, seed)
-    native = NativeEnvs(env, batch, threads=1)
-    ctrls = random_controls(native, native.reset(jax.random.split(jax.random.PRNGKey(seed), batch)), seed)
+    ctrls = random_controls(NativeEnvs(env, batch, threads=1), seed)
     models = [variant_model(base, v) for v in variants]
     speeds = {v.name: [] for v in variants}
     finite = {v.name: True for v in variants}
