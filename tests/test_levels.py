@@ -132,6 +132,42 @@ def test_level2_obstacles():
                         assert math.hypot(s - s2, v - v2) - reach >= 0.45 - 1e-9
 
 
+SLALOM = LevelConfig(block_group=(2, 3))
+
+
+def test_block_groups_are_slaloms_from_alternate_walls():
+    groups = [f for seed in range(200) for f in level_layout(seed, 2, SLALOM).features if f.kind == "block"]
+    assert {len(f.solids) for f in groups} == {1, 2, 3}  # blocks that find no room are left out
+    for seed in range(40):
+        lay = level_layout(seed, 2, SLALOM)
+        world = generate_level(seed, 2, SLALOM)
+        for f in (f for f in lay.features if f.kind == "block"):
+            sides = [math.copysign(1.0, v) for _, v, _, _, _ in f.solids]
+            assert all(a == -b for a, b in zip(sides, sides[1:]))  # each from the wall opposite the one before
+            gaps = [lay.width / 2 + abs(v) - hv for _, v, _, hv, _ in f.solids]
+            assert min(gaps) >= 0.45 - 1e-9 and np.isclose(f.value, min(gaps))
+            assert all(abs(v) + hv >= lay.width / 2 + CFG.wall_thickness - 1e-9 for _, v, _, hv, _ in f.solids)
+            centres = [sc for sc, _, _, _, _ in f.solids]
+            assert all(1.0 - 1e-9 <= b - a <= 1.6 + 1e-9 for a, b in zip(centres, centres[1:]))
+            assert np.isclose(f.begin, centres[0] - f.solids[0][2]) and np.isclose(f.end, centres[-1] + f.solids[-1][2])
+            for sc, v, _, _, _ in f.solids:  # each block is solid in the maps, its gap free
+                side = math.copysign(1.0, v)
+                block = lay.point(sc) + side * (lay.width / 2 - 0.1) * _left(lay, sc)
+                gap = lay.point(sc) - side * (lay.width / 2 - 0.1) * _left(lay, sc)
+                assert _cell_value(world, world.floor, block) == _cell_value(world, world.ceiling, block)
+                assert _cell_value(world, world.ceiling, gap) > _cell_value(world, world.floor, gap)
+    single = [level_layout(seed, 2) for seed in range(40)]  # the default: one block, the worlds of older runs
+    assert all(len(f.solids) == 1 for lay in single for f in lay.features if f.kind == "block")
+    with pytest.raises(WorldError, match="block_pitch"):
+        LevelConfig(block_group=(1, 3), block_pitch=(0.5, 1.0)).validate()
+
+
+def _left(layout, s):
+    """Unit vector to the left of the route at arc length s."""
+    d = _heading(layout, s)
+    return np.array([-d[1], d[0]]) / np.linalg.norm(d)
+
+
 def test_level3_steps_ramps_and_turns():
     layouts = [_layout(s, 3) for s in SEEDS]
     kinds = {k for lay in layouts for k in lay.kinds()}

@@ -5,8 +5,9 @@
   open sky (a quarter of the worlds); in half of them a low section 0.5-1.5 m long under a 0.30-0.40 m roof
   (the body must crouch).
 - d2: d1 plus 1-4 obstacles: bars (the roof drops to 0.36-0.45 m in a 0.05-0.2 m stripe across the corridor),
-  side blocks (solid, from one wall, leaving at least 0.45 m to the other) and pillar groups (2-5 square or round
-  columns 0.1-0.25 m across, at least 0.45 m from each other and the walls).
+  side blocks (solid, from one wall, leaving at least 0.45 m to the other; with `block_group` above 1, a slalom of
+  up to that many from alternate walls) and pillar groups (2-5 square or round columns 0.1-0.25 m across, at least
+  0.45 m from each other and the walls).
 - d3: d2 plus 1-2 steps (3-10 cm up or down, for good) or ramps (5-15 degrees, at most 10 cm up or down), and the
   centre line may turn: an L (one bend) or an S (two opposite bends), each bend 30-90 degrees.
 - d4: d3 plus 1-2 voids: gaps across the floor 10-25 cm long and 0.1-1.0 m deep.
@@ -79,6 +80,11 @@ class LevelConfig:
     """Length of a side block along the route."""
     block_corridor_width: float = 0.9
     """Smallest corridor width of a world with a side block."""
+    block_group: tuple[int, int] = (1, 1)
+    """Number of side blocks one block obstacle holds: a slalom, each from the wall opposite the one before
+    (fewer if they do not fit; (1, 1) draws exactly the worlds of runs saved before this field)."""
+    block_pitch: tuple[float, float] = (1.0, 1.6)
+    """Distance along the route between the centres of consecutive blocks of a group."""
     pillars: tuple[int, int] = (2, 5)
     """Number of columns in a pillar group (fewer if they do not fit)."""
     pillar_size: tuple[float, float] = (0.1, 0.25)
@@ -138,6 +144,10 @@ class LevelConfig:
                              f"({2 * self.min_gap + self.pillar_size[1]:.2f} m)")
         if self.block_corridor_width < self.min_gap + self.resolution:
             raise WorldError(f"block_corridor_width must exceed min_gap {self.min_gap}")
+        if self.block_group[0] < 1 or self.block_pitch[0] < self.block_length[1] + self.min_gap:
+            raise WorldError(f"need block_group >= 1 and block_pitch at least the longest block plus min_gap "
+                             f"({self.block_length[1] + self.min_gap:.2f} m), got {self.block_group}, "
+                             f"{self.block_pitch}")
         if self.bend_angle[1] > 90.0 or self.ramp_angle[1] >= 90.0:
             raise WorldError("bend_angle is at most 90 degrees and ramp_angle below 90")
 
@@ -154,10 +164,10 @@ class Feature:
     """s where it ends (equal to `begin` for a step)."""
     value: float = 0.0
     """crawl: its roof height; bar: its underside; step, ramp: the rise (negative: down); void: its depth;
-    block: the gap it leaves; pillars: unused (0)."""
+    block: the narrowest gap its blocks leave; pillars: unused (0)."""
     solids: tuple = ()
     """block, pillars: solid columns as (s, v, half length along, half width across, round) in route coordinates
-    (v: distance to the left of the centre line)."""
+    (v: distance to the left of the centre line); a block obstacle holds one per block of its group."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -267,6 +277,21 @@ def _pillar_group(rng, c: LevelConfig, width: float, room: float) -> tuple[float
     return span, tuple((p[0] - lo, p[1], p[2], p[2], p[3]) for p in placed)
 
 
+def _block_group(rng, c: LevelConfig, width: float) -> tuple[float, float, tuple]:
+    """(span along the route, the narrowest gap, solids relative to the span's begin) of a block obstacle: one side
+    block, or with `block_group` above 1 a slalom of blocks from alternate walls `block_pitch` apart."""
+    solids, gaps = [], []
+    count = 1 if c.block_group[1] == 1 else int(rng.integers(c.block_group[0], c.block_group[1] + 1))
+    for k in range(count):  # the draws of the first block are those of a single one
+        size, gap = rng.uniform(*c.block_length), rng.uniform(c.min_gap, max(c.min_gap, width / 2))
+        side = float(rng.choice([-1.0, 1.0])) if k == 0 else -math.copysign(1.0, solids[-1][1])
+        centre = solids[-1][0] + rng.uniform(*c.block_pitch) if k else size / 2
+        depth = width / 2 - gap / 2 + c.wall_thickness / 2  # half width across, reaching into the wall
+        solids.append((centre, side * (width / 2 + c.wall_thickness - depth), size / 2, depth, False))
+        gaps.append(gap)
+    return solids[-1][0] + solids[-1][2], min(gaps), tuple(solids)
+
+
 def level_layout(seed: int, level: int, config: LevelConfig = LevelConfig()) -> Layout:
     """The layout of level world (seed, level) for levels 1-4; the same inputs always give the same layout."""
     config.validate()
@@ -306,11 +331,7 @@ def level_layout(seed: int, level: int, config: LevelConfig = LevelConfig()) -> 
             top = min(c.bar_underside[1], ceiling - 0.02)
             drawn.append(("bar", rng.uniform(*c.bar_width), rng.uniform(min(c.bar_underside[0], top), top), ()))
         elif kind == "block":
-            size, gap, side = rng.uniform(*c.block_length), rng.uniform(c.min_gap, max(c.min_gap, width / 2)), \
-                rng.choice([-1.0, 1.0])
-            depth = width / 2 - gap / 2 + c.wall_thickness / 2  # half width across, reaching into the wall
-            drawn.append(("block", size, gap, ((size / 2, side * (width / 2 + c.wall_thickness - depth),
-                                                 size / 2, depth, False),)))
+            drawn.append(("block", *_block_group(rng, c, width)))
         else:
             drawn.append(("pillars", 0.0, 0.0, ()))  # its columns are drawn once the room left is known
     if rng.uniform() < c.crawl_fraction:
@@ -330,6 +351,13 @@ def level_layout(seed: int, level: int, config: LevelConfig = LevelConfig()) -> 
             size, solids = _pillar_group(rng, c, width, max((hi - lo for lo, hi in free), default=0.0))
             if not solids:
                 continue
+        elif kind == "block":  # a slalom too long for the room left keeps the blocks that fit
+            room = max((hi - lo for lo, hi in free), default=0.0)
+            if solids[-1][0] + solids[-1][2] > room:
+                while len(solids) > 1 and solids[-1][0] + solids[-1][2] > room:
+                    solids = solids[:-1]
+                value = min(width / 2 + abs(v) - hv for _, v, _, hv, _ in solids)  # the gaps the kept ones leave
+            size = solids[-1][0] + solids[-1][2]
         begin = _place(rng, free, size)
         if begin is None:
             continue  # no room left for it
