@@ -8,6 +8,7 @@ from typing import Any, Literal
 
 import yaml
 
+from legged.soccer.config import SoccerConfig
 from legged.tasks import default_config, task_entry
 from policies.config_io import ConfigError, from_dict, to_dict
 from policies.soccer.config import SoccerTrainConfig, check_soccer, nest_soccer_keys, soccer_override_path
@@ -165,6 +166,11 @@ class TrainConfig:
     """rsl backend: whenever training starts or resumes, each environment's episode clock starts at a random step
     of its time limit (rsl-rl's init_at_random_ep_len), so that episodes end on different iterations instead of
     all together (e.g. 512 soccer games of 60 s) and every rollout holds every phase of an episode."""
+    randomization_ramp: int = 0
+    """rsl backend: environment steps over which the domain randomisation (env.randomization, pushes included) of new
+    episodes grows from none, the nominal robot, to the task's full ranges, each drawn quantity moving linearly from
+    its nominal value to its draw (0: the full ranges from the first episode). Evaluation always draws the full
+    ranges."""
     device: str = "cpu"
     """PyTorch device of the rsl backend (cpu, cuda, cuda:1, ...)."""
     physics: Literal["mjx", "native"] = "mjx"
@@ -229,6 +235,14 @@ class TrainConfig:
                               "training step); train native physics with --backend rsl")
         if cfg.backend == "brax" and cfg.random_episode_start:
             raise ConfigError("random_episode_start is for --backend rsl (Brax PPO resets its environments itself)")
+        if cfg.randomization_ramp < 0:
+            raise ConfigError(f"randomization_ramp must be >= 0 environment steps (0: none), got "
+                              f"{cfg.randomization_ramp}")
+        if cfg.randomization_ramp and cfg.backend != "rsl":
+            raise ConfigError("randomization_ramp is for --backend rsl (Brax PPO resets its environments itself)")
+        if cfg.randomization_ramp and isinstance(cfg.env, SoccerConfig):
+            raise ConfigError(f"randomization_ramp is for the Go1 tasks; {cfg.task} draws its robots' randomisation "
+                              "in its game (soccer.env)")
         if cfg.backend == "brax" and cfg.ppo.mixed_precision:
             raise ConfigError("ppo.mixed_precision is for --backend rsl (rsl-rl's bfloat16 update); Brax trains in "
                               "float32")

@@ -69,8 +69,10 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     levels = None if payload is None else payload.get("curriculum_levels")
     if levels is not None:  # every process's levels, in rank order; saved for another number of environments,
         levels = launch.own_rows(levels.numpy()) if len(levels) == config.num_envs else None  # they start afresh
+    ramp = (lambda at: min(1.0, at / config.randomization_ramp)) if config.randomization_ramp else None
     venv = hooks.wrap(RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device,
-                                latent_noise=config.latent.latent_dim if hib else 0, levels=levels))
+                                latent_noise=config.latent.latent_dim if hib else 0, levels=levels,
+                                dr_scale=None if ramp is None else ramp(step)))
     if config.random_episode_start:  # episodes end on different iterations
         generator = torch.Generator().manual_seed(config.seed + launch.rank + 7919 * iteration)
         venv.episode_length_buf = torch.randint(0, env.config.episode_steps, (local_envs,), generator=generator)
@@ -101,6 +103,8 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
             stepping = 0.0
             reward_sum = torch.zeros((), device=device)
             hooks.before_rollout(venv)
+            if ramp is not None:
+                venv.set_randomization_scale(ramp(step))
             with torch.inference_mode():
                 for _ in range(ppo.num_steps_per_env):
                     actions = alg.act(obs)
@@ -140,6 +144,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                       "action_std": float(alg.get_policy().output_std.detach().mean()),
                       **{f"loss_{k}": float(v) for k, v in losses.items() if k != "symmetry"}, **diagnostics,
                       **timing, **hooks.record(venv), **({} if spread is None else {"process_spread": spread}),
+                      **({} if ramp is None else {"randomization_scale": ramp(step - per_iteration)}),
                       **startup}
             startup = {}
             bar.update(per_iteration)

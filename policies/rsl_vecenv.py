@@ -68,7 +68,7 @@ class RslVecEnv(VecEnv):
     """rsl-rl interface to a batch of MJX environments (auto-reset, time-outs, episode logs)."""
 
     def __init__(self, vector: VectorEnv, seed: int, device: str = "cpu", cfg: dict | None = None,
-                 latent_noise: int = 0, levels: np.ndarray | None = None):
+                 latent_noise: int = 0, levels: np.ndarray | None = None, dr_scale: float | None = None):
         self.vector = vector
         self.latent_noise = latent_noise
         """Size of the standard-normal `latent_noise` observation drawn at every step (0: none)."""
@@ -81,6 +81,8 @@ class RslVecEnv(VecEnv):
         carry = None
         if levels is not None:  # a resumed run: every environment goes on at its curriculum level
             carry = level_carry(levels)
+        if dr_scale is not None:  # a randomisation ramp: the first episodes at its scale too
+            carry = {**(carry or {}), "dr_scale": jnp.full(self.num_envs, dr_scale, jnp.float32)}
         self.batch = vector.reset(jax.random.PRNGKey(seed), carry)
         self._obs = self.batch.state.obs
         self.episode_stats = EpisodeStats()
@@ -105,6 +107,10 @@ class RslVecEnv(VecEnv):
     def episode_length_buf(self, value: torch.Tensor) -> None:
         """Randomised initial episode lengths (rsl-rl's init_at_random_ep_len)."""
         self.batch.state.info["step"] = to_jax(value.to(torch.int32))
+
+    def set_randomization_scale(self, scale: float) -> None:
+        """The randomisation scale of the episodes that start from now on (legged.envs.base.LeggedEnv.spawn)."""
+        self.batch.state.info["dr_scale"] = jnp.full(self.num_envs, scale, jnp.float32)
 
     def _observations(self, obs: dict) -> TensorDict:
         groups = {k: to_torch(v, self.device) for k, v in obs.items()}

@@ -260,3 +260,52 @@ def test_a_latency_range_beyond_one_control_period_is_refused():
     late = dataclasses.replace(GO1_RANDOMIZATION, latency_s=(0.0, 0.03))
     with pytest.raises(ValueError, match="env.randomization.latency_s: 0.03 s is more than one control period"):
         make("go1-flat", randomization=late)
+
+
+def test_a_ramp_scale_moves_each_draw_from_the_nominal_robot_to_the_draw():
+    """A carried `dr_scale` (a run's randomisation_ramp) weakens an episode's draw: at 0 every quantity is the nominal
+    robot's (its model fields those of the model, but for MuJoCo's default contact impedance), at 1 the draw
+    itself, at 0.5 halfway (the latency in whole physics steps, the cone on or off); pushes scale with it and the
+    next episode inherits it. The run's setting is refused where it cannot act."""
+    from legged.envs.randomize import randomized_fields
+    from legged.tasks import make
+    from policies.config import TrainConfig
+    from policies.config_io import ConfigError
+
+    env = make("go1-flat")
+    key = jax.random.PRNGKey(3)
+    drawn = env.spawn(key).info["dr"]
+    assert set(drawn) <= set(env._nominal_dr)
+    full = env.spawn(key, {"dr_scale": jnp.float32(1.0)}).info
+    none = env.spawn(key, {"dr_scale": jnp.float32(0.0)}).info
+    half = env.spawn(key, {"dr_scale": jnp.float32(0.5)}).info
+    for k, v in drawn.items():
+        np.testing.assert_allclose(full["dr"][k], v, rtol=1e-6, err_msg=k)
+        np.testing.assert_allclose(none["dr"][k], env._nominal_dr[k], rtol=1e-6, err_msg=k)
+        if k in ("latency", "elliptic"):
+            assert half["dr"][k] == jnp.round(v / 2) and half["dr"][k].dtype == v.dtype
+        else:
+            np.testing.assert_allclose(half["dr"][k], (np.asarray(v) + env._nominal_dr[k]) / 2, rtol=1e-5, err_msg=k)
+    base = {k: np.asarray(v) for k, v in env._base_fields.items()}
+    nominal = randomized_fields(base, {k: np.asarray(v) for k, v in none["dr"].items()}, env._trunk, xp=np)
+    feet = base["foot_pairs"] > 0
+    for field, value in nominal.items():
+        if field == "opt.impratio":
+            assert value == pytest.approx(env.mj_model.opt.impratio)
+        elif field == "opt.cone":
+            assert value == env.mj_model.opt.cone
+        elif field == "pair_solimp":
+            np.testing.assert_allclose(value[feet], np.broadcast_to(MUJOCO_SOLIMP, value[feet].shape), rtol=1e-6)
+        else:
+            np.testing.assert_allclose(value, base[field], rtol=1e-5, atol=1e-7, err_msg=field)
+    assert float(none["dr_scale"]) == 0.0 and float(env.spawn(key).info["dr_scale"]) == 1.0
+    assert float(env.next_carry(half)["dr_scale"]) == 0.5 and "dr_scale" not in env.carry(half)
+    view, _ = env._spawned_view(key)
+    kicked = lambda info: np.abs(np.asarray(env._push(view, {**info, "step": jnp.int32(0)}, key)[0].qvel[:2]))
+    assert kicked(none).max() == 0.0 and np.allclose(kicked(half), kicked(full) / 2)
+    for bad, match in (({"randomization_ramp": -1}, ">= 0"), ({"randomization_ramp": 10, "backend": "brax",
+                                                                 "physics": "mjx"}, "--backend rsl")):
+        with pytest.raises(ConfigError, match=match):
+            TrainConfig(task="go1-flat", **bad).resolved()
+    with pytest.raises(ConfigError, match="Go1 tasks"):
+        TrainConfig(task="soccer-1v1", randomization_ramp=10).resolved()

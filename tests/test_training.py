@@ -175,6 +175,24 @@ def test_native_training_is_reproducible(tiny_env, tmp_path, monkeypatch):
     assert RunDir(tmp_path / "a").load_config().physics == "native"
 
 
+def test_a_randomisation_ramp_grows_with_the_steps_trained(tiny_env, tmp_path, monkeypatch):
+    """With randomization_ramp, each rollout's new episodes (and the first ones) draw at the ramp's scale of the
+    steps trained so far, logged with every record; a resumed run goes on along the ramp."""
+    monkeypatch.setattr(training, "build_env", lambda config: tiny_env)
+    scales = []
+    monkeypatch.setattr(RslVecEnv, "set_randomization_scale",
+                        lambda self, s, original=RslVecEnv.set_randomization_scale: (scales.append(s),
+                                                                                     original(self, s)))
+    with torch_threads_kept():
+        training.start_run("go1-flat", str(tmp_path / "run"), num_envs=BATCH, timesteps=80, progress=False,
+                           overrides=TINY + ["randomization_ramp=160"], physics="native", threads=1)
+        config = tmp_path / "run" / "config.yaml"
+        config.write_text(config.read_text().replace("timesteps: 80\n", "timesteps: 160\n"))
+        training.resume_run(str(tmp_path / "run"), progress=False)
+    assert scales == [0.0, 0.25, 0.5, 0.75]
+    assert [r["randomization_scale"] for r in RunDir(tmp_path / "run").metrics()] == [0.0, 0.25, 0.5, 0.75]
+
+
 def test_confined_summary_metrics():
     finals = [{"return": 1.0, "length": 5, "success": 1.0, "time_to_goal_s": 4.0, "collisions": 2.0,
                "final_distance_m": 0.1, "reward/exploration": 0.5},

@@ -57,6 +57,12 @@ class MjxEnv(Env, abc.ABC):
         curriculum level; {} by default."""
         return {}
 
+    def next_carry(self, info: dict) -> dict:
+        """What the engines hand the next episode: `carry(info)` and, where the episode has one, its randomisation
+        scale (`dr_scale`: a training run's ramp, legged.envs.base.LeggedEnv.spawn)."""
+        carry = self.carry(info)
+        return {**carry, "dr_scale": info["dr_scale"]} if "dr_scale" in info else carry
+
     # ----------------------------------------------------------------- engine read-outs
     def mjx_model_for(self, info: dict):
         """The MJX model of an episode (its randomisation applied)."""

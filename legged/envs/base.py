@@ -27,7 +27,7 @@ from legged.envs.math import quat_from_yaw, rotate_inv, up_z
 from legged.envs.motor import motor_limits, servo_gains, within_motor_curve
 from legged.envs.rewards import penalty_terms, step_reward
 from legged.envs.randomize import (CONE_DR, MODEL_DR, check_latency, draw, late_controls, mjx_fields,
-                                   randomized_fields)
+                                   nominal_draw, randomized_fields, weakened)
 from legged.robots.models import mjx_model_of, robot_model
 from legged.robots.spec import RobotSpec
 from legged.sensors.heightscan import surface_height
@@ -87,6 +87,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
         self._base_fields["cone"] = jnp.asarray(m.opt.cone, jnp.int32)
         self._base_fields["foot_pairs"] = jnp.asarray(np.isin(m.pair_geom1, self._feet) | np.isin(m.pair_geom2, self._feet),
                                                       jnp.float32)
+        self._nominal_dr = nominal_draw(self._base_fields, self._base_fields["pair_friction"][0, 0], m.opt.impratio)
         self._weight = float(m.body_subtreemass[self._trunk] * 9.81)
         self._foot_bodies = np.array(m.geom_bodyid[self._feet])
         self._foot_offsets = jnp.asarray(m.geom_pos[self._feet], jnp.float32)
@@ -194,7 +195,7 @@ class LeggedEnv(MjxEnv, abc.ABC):
         c = self.config.randomization
         period = max(1, int(round(c.push_interval_s / self.dt)))
         pushed = (info["step"] % period == 0) & ~data.diverged
-        kick = jax.random.uniform(rng, (2,), minval=-c.push_velocity, maxval=c.push_velocity)
+        kick = jax.random.uniform(rng, (2,), minval=-c.push_velocity, maxval=c.push_velocity) * info["dr_scale"]
         return data.replace(qvel=data.qvel.at[0:2].add(jnp.where(pushed, kick, 0.0))), pushed
 
     # ----------------------------------------------------------------- randomisation and physics
@@ -253,14 +254,19 @@ class LeggedEnv(MjxEnv, abc.ABC):
         return self._contacts(data)
 
     def spawn(self, rng: jax.Array, carry: dict | None = None) -> Spawn:
+        """A new episode; a carried `dr_scale` (a training run's randomisation ramp, TrainConfig.randomization_ramp)
+        moves its randomisation that part of the way from the nominal robot to the draw, pushes included."""
         rng, k_dr, k_task = jax.random.split(rng, 3)
         dr = self.randomize(k_dr)
+        scale = jnp.float32(1.0) if carry is None or "dr_scale" not in carry else carry["dr_scale"]
+        if self.config.randomization.enabled and carry is not None and "dr_scale" in carry:
+            dr = weakened(dr, self._nominal_dr, scale)
         pos, yaw, task_info = self._task_reset(k_task, carry)
         qpos = jnp.zeros(self.mj_model.nq).at[0:3].set(pos).at[3:7].set(quat_from_yaw(yaw))
         qpos = qpos.at[self._qadr].set(self._default_pose)
         info = dict(rng=rng, dr=dr, last_action=jnp.zeros(self.action_size), last_qvel=jnp.zeros(self.action_size),
                     step=jnp.int32(0), collisions=jnp.float32(0.0), touching=jnp.zeros(1 + len(self._calf_bodies), bool),
-                    truncation=jnp.float32(0.0), **task_info)
+                    truncation=jnp.float32(0.0), dr_scale=scale, **task_info)
         if self.pushes:
             info["teleported"] = jnp.bool_(False)
         return Spawn(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv), ctrl=self._default_pose, info=info)

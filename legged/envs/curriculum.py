@@ -13,13 +13,13 @@ def pick_tile(rng: jax.Array, carry: dict | None, tile_level: jax.Array, n_level
     first reset, a random level once past the hardest); without it, a uniform tile. A carried tile >= 0 (an
     evaluator's choice) wins over both."""
     k_level, k_tile = jax.random.split(rng)
-    if carry is None or not curriculum:
+    if carry is None or "level" not in carry or not curriculum:  # (a carry may hold only a randomisation scale)
         level = jnp.int32(0) if curriculum else jax.random.randint(k_level, (), 0, n_levels)
     else:
         level = jnp.where(carry["level"] >= n_levels, jax.random.randint(k_level, (), 0, n_levels), carry["level"])
     weights = jnp.where(tile_level == level, 0.0, -jnp.inf) if curriculum else jnp.zeros(tile_level.shape[0])
     tile = jax.random.categorical(k_tile, weights).astype(jnp.int32)
-    if carry is not None:
+    if carry is not None and "tile" in carry:
         tile = jnp.where(carry["tile"] >= 0, carry["tile"], tile)
     return tile, tile_level[tile]
 

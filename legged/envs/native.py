@@ -185,7 +185,7 @@ class NativeEnvs:
             return jax.vmap(env.spawn)(split[:, 0], carry), split[:, 1]
 
         self._spawn = jax.jit(spawn)
-        self._carry = jax.jit(jax.vmap(env.carry))
+        self._carry = jax.jit(jax.vmap(env.next_carry))
         self._first = jax.jit(jax.vmap(env.start_episode))
         self._prepare = jax.jit(lambda state, action, *args: jax.vmap(lambda s, a: env.prepare(s, a, *args))(state, action))
         self._transition = jax.jit(jax.vmap(env.advance))

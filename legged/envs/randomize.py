@@ -12,6 +12,7 @@ import math
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import mujoco
 
 from legged.envs.config import SOFT_SOLIMP, RandomizationConfig
@@ -79,6 +80,35 @@ def draw_model(c, rng: jax.Array, nu: int, sim_dt: float, n_substeps: int) -> di
         bias = jax.random.uniform(more[8], (6,), minval=-1.0, maxval=1.0)
         dr["gravity_bias"], dr["gyro_bias"] = bias[:3] * c.imu_bias[0], bias[3:] * c.imu_bias[1]
     return dr
+
+
+def nominal_draw(base: dict, nominal_friction, impratio: float) -> dict:
+    """The parameters `draw` gives the nominal robot of a model's nominal fields `base` (as LeggedEnv holds them),
+    for every quantity it may draw: the model's own friction, joint damping, armature, friction loss, feet's solref
+    time constant and margin and impratio; unit scales; no payload, offsets, biases or latency; MuJoCo's default
+    contact impedance (softness 0) and the model's own friction cone."""
+    dofs, feet = base["joint_dofs"], np.flatnonzero(np.asarray(base["foot_pairs"]) > 0)
+    nu, nbody = dofs.shape[0], base["body_mass"].shape[0]
+    out = dict(friction=jnp.float32(nominal_friction), mass_scale=jnp.ones(nbody), base_mass=jnp.float32(0.0),
+               com=jnp.zeros(3), strength=jnp.ones(nu), kp=jnp.float32(1.0), kd=jnp.float32(1.0),
+               damping=dofs @ base["dof_damping"], armature=dofs @ base["dof_armature"],
+               frictionloss=dofs @ base["dof_frictionloss"], softness=jnp.float32(0.0), latency=jnp.int32(0),
+               spin=jnp.float32(1.0), elliptic=jnp.float32(0.0), impratio=jnp.float32(impratio),
+               encoder_offset=jnp.zeros(nu), gravity_bias=jnp.zeros(3), gyro_bias=jnp.zeros(3))
+    if len(feet):
+        out.update(timeconst=base["pair_solref"][feet[0], 0], margin=base["pair_margin"][feet[0]])
+    return out
+
+
+def weakened(dr: dict, nominal: dict, scale) -> dict:
+    """A draw `dr` moved toward the nominal robot's parameters `nominal_draw`: each quantity at `scale` (0-1) of its
+    way from the nominal value to the drawn one (0: the nominal robot, 1: the draw). The latency, in whole physics
+    steps, and the elliptic cone, on or off, are rounded."""
+    out = {}
+    for key, value in dr.items():
+        moved = nominal[key] + scale * (value - nominal[key])
+        out[key] = jnp.round(moved).astype(jnp.asarray(value).dtype) if key in ("latency", "elliptic") else moved
+    return out
 
 
 def late_controls(previous, targets, latency, n_substeps: int):

@@ -125,7 +125,7 @@ class VectorEnv:
         nxt = jax.vmap(lambda s, a: self.env.step(s, a, *env_args))(batch.state, action)
         sums, finished, done, time_out = account(batch.sums, nxt)
         split = jax.vmap(jax.random.split)(batch.keys)
-        carry = jax.vmap(self.env.carry)(nxt.info)
+        carry = jax.vmap(self.env.next_carry)(nxt.info)
         fresh = jax.lax.cond(done.any(), lambda: jax.vmap(self.env.reset)(split[:, 0], carry), lambda: nxt)
         state = select_envs(done, fresh, nxt)
         result = StepResult(obs=state.obs, reward=nxt.reward, done=done, time_out=time_out, finished=finished)
