@@ -267,6 +267,7 @@ def test_a_ramp_scale_moves_each_draw_from_the_nominal_robot_to_the_draw():
     robot's (its model fields those of the model, but for MuJoCo's default contact impedance), at 1 the draw
     itself, at 0.5 halfway (the latency in whole physics steps, the cone on or off); pushes scale with it and the
     next episode inherits it. The run's setting is refused where it cannot act."""
+    from legged.envs.api import next_carry
     from legged.envs.randomize import randomized_fields
     from legged.tasks import make
     from policies.config import TrainConfig
@@ -299,7 +300,7 @@ def test_a_ramp_scale_moves_each_draw_from_the_nominal_robot_to_the_draw():
         else:
             np.testing.assert_allclose(value, base[field], rtol=1e-5, atol=1e-7, err_msg=field)
     assert float(none["dr_scale"]) == 0.0 and float(env.spawn(key).info["dr_scale"]) == 1.0
-    assert float(env.next_carry(half)["dr_scale"]) == 0.5 and "dr_scale" not in env.carry(half)
+    assert float(next_carry(env, half)["dr_scale"]) == 0.5 and "dr_scale" not in env.carry(half)
     view, _ = env._spawned_view(key)
     kicked = lambda info: np.abs(np.asarray(env._push(view, {**info, "step": jnp.int32(0)}, key)[0].qvel[:2]))
     assert kicked(none).max() == 0.0 and np.allclose(kicked(half), kicked(full) / 2)

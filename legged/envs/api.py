@@ -57,12 +57,6 @@ class MjxEnv(Env, abc.ABC):
         curriculum level; {} by default."""
         return {}
 
-    def next_carry(self, info: dict) -> dict:
-        """What the engines hand the next episode: `carry(info)` and, where the episode has one, its randomisation
-        scale (`dr_scale`: a training run's ramp, legged.envs.base.LeggedEnv.spawn)."""
-        carry = self.carry(info)
-        return {**carry, "dr_scale": info["dr_scale"]} if "dr_scale" in info else carry
-
     # ----------------------------------------------------------------- engine read-outs
     def mjx_model_for(self, info: dict):
         """The MJX model of an episode (its randomisation applied)."""
@@ -172,3 +166,10 @@ class MjxEnv(Env, abc.ABC):
     @property
     def backend(self) -> str:
         return "mjx"
+
+
+def next_carry(env, info: dict) -> dict:
+    """What the engines hand an environment's next episode: `env.carry(info)` and, where the episode has one, its
+    randomisation scale (`dr_scale`: a training run's ramp, legged.envs.base.LeggedEnv.spawn)."""
+    carry = env.carry(info)
+    return {**carry, "dr_scale": info["dr_scale"]} if "dr_scale" in info else carry

@@ -9,6 +9,7 @@ contact sensors of `env.native_model()`). `NativeEnvs` runs the task's own `spaw
 
 from __future__ import annotations
 
+import functools
 import os
 import time
 
@@ -19,6 +20,7 @@ import numpy as np
 from brax.envs.base import State
 from mujoco.batch import Batch, SimulationError
 
+from legged.envs.api import next_carry
 from legged.envs.physics import CAMERA_FIELDS, PhysicsView, is_diverged, select_envs
 from legged.sensors.native_raycam import NativeRayCaster
 from legged.worlds.mjcf import CONTACT_SLOTS
@@ -185,7 +187,7 @@ class NativeEnvs:
             return jax.vmap(env.spawn)(split[:, 0], carry), split[:, 1]
 
         self._spawn = jax.jit(spawn)
-        self._carry = jax.jit(jax.vmap(env.next_carry))
+        self._carry = jax.jit(jax.vmap(functools.partial(next_carry, env)))
         self._first = jax.jit(jax.vmap(env.start_episode))
         self._prepare = jax.jit(lambda state, action, *args: jax.vmap(lambda s, a: env.prepare(s, a, *args))(state, action))
         self._transition = jax.jit(jax.vmap(env.advance))

@@ -8,12 +8,14 @@ up: return, length, every reward term and the task's metrics at the last step.
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 from brax.envs.base import State
 
+from legged.envs.api import next_carry
 from legged.envs.native import NativeEnvs
 from legged.envs.physics import select_envs
 
@@ -125,7 +127,7 @@ class VectorEnv:
         nxt = jax.vmap(lambda s, a: self.env.step(s, a, *env_args))(batch.state, action)
         sums, finished, done, time_out = account(batch.sums, nxt)
         split = jax.vmap(jax.random.split)(batch.keys)
-        carry = jax.vmap(self.env.next_carry)(nxt.info)
+        carry = jax.vmap(functools.partial(next_carry, self.env))(nxt.info)
         fresh = jax.lax.cond(done.any(), lambda: jax.vmap(self.env.reset)(split[:, 0], carry), lambda: nxt)
         state = select_envs(done, fresh, nxt)
         result = StepResult(obs=state.obs, reward=nxt.reward, done=done, time_out=time_out, finished=finished)
