@@ -103,8 +103,9 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
             stepping = 0.0
             reward_sum = torch.zeros((), device=device)
             hooks.before_rollout(venv)
-            if ramp is not None:
-                venv.set_randomization_scale(ramp(step))
+            scale = None if ramp is None else ramp(step)  # the randomisation of this rollout's new episodes
+            if scale is not None:
+                venv.set_randomization_scale(scale)
             with torch.inference_mode():
                 for _ in range(ppo.num_steps_per_env):
                     actions = alg.act(obs)
@@ -144,7 +145,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                       "action_std": float(alg.get_policy().output_std.detach().mean()),
                       **{f"loss_{k}": float(v) for k, v in losses.items() if k != "symmetry"}, **diagnostics,
                       **timing, **hooks.record(venv), **({} if spread is None else {"process_spread": spread}),
-                      **({} if ramp is None else {"randomization_scale": ramp(step - per_iteration)}),
+                      **({} if scale is None else {"randomization_scale": scale}),
                       **startup}
             startup = {}
             bar.update(per_iteration)

@@ -258,8 +258,9 @@ class LeggedEnv(MjxEnv, abc.ABC):
         moves its randomisation that part of the way from the nominal robot to the draw, pushes included."""
         rng, k_dr, k_task = jax.random.split(rng, 3)
         dr = self.randomize(k_dr)
-        scale = jnp.float32(1.0) if carry is None or "dr_scale" not in carry else carry["dr_scale"]
-        if self.config.randomization.enabled and carry is not None and "dr_scale" in carry:
+        ramped = carry is not None and "dr_scale" in carry
+        scale = carry["dr_scale"] if ramped else jnp.float32(1.0)
+        if ramped and self.config.randomization.enabled:
             dr = weakened(dr, self._nominal_dr, scale)
         pos, yaw, task_info = self._task_reset(k_task, carry)
         qpos = jnp.zeros(self.mj_model.nq).at[0:3].set(pos).at[3:7].set(quat_from_yaw(yaw))
