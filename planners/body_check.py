@@ -5,7 +5,10 @@ resolution and rotated by the full roll, pitch and yaw: the lower samples must l
 the upper ones below the ceiling. The legs must reach the floor: at each foot's nominal stance point
 the body (tilt included) must stand within the robot's `body_height_range` above the floor there, or
 at one of the foot's alternative points: a little inward (a narrower stance) or a stride fore or aft
-(stepping over a gap in the floor). Poses are checked in batches (all states of a motion at once),
+(stepping over a gap in the floor). The legs must be clear of walls: the rectangle the feet span in the
+default stance, grown by a margin, is checked at the height of the knees at the robot's lowest stance
+(what the trunk's box does not cover: a side block beside the body can pass the box and still stand in
+the legs' way). Poses are checked in batches (all states of a motion at once),
 which is what makes planning in Python fast enough.
 
 The planner's maps are more conservative than the world (`step_walls`): a floor edge higher than the robot
@@ -24,9 +27,10 @@ from scipy import ndimage
 from legged.robots.spec import RobotSpec
 from legged.worlds.maps import HeightMaps
 
-VALID, OFF_MAP, OUT_OF_REACH, HITS_CEILING, HITS_FLOOR = range(5)
+VALID, OFF_MAP, OUT_OF_REACH, HITS_CEILING, HITS_FLOOR, LEGS_BLOCKED = range(6)
 REASONS = {OFF_MAP: "the body leaves the map", OUT_OF_REACH: "the legs cannot hold the body there",
-           HITS_CEILING: "the body hits the ceiling", HITS_FLOOR: "the body hits the floor"}
+           HITS_CEILING: "the body hits the ceiling", HITS_FLOOR: "the body hits the floor",
+           LEGS_BLOCKED: "the legs hit an obstacle beside the body"}
 
 
 def rotation_rpy(roll, pitch, yaw) -> np.ndarray:
@@ -91,6 +95,21 @@ class BodyCheckConfig:
     """A floor edge higher than this between two free columns is a wall to the planner (its lower side turns solid
     for one cell), except the rims of gaps up to 2 * stride_slack wide, which the feet stride over; metres (None:
     no such walls)."""
+    leg_margin: float | None = 0.0
+    """The legs' rectangle (the bounding rectangle of the feet's stance points, grown by this much on every side) must
+    be clear of the floor at `leg_height` above the feet at the lowest stance, metres; at 0 the feet's centres, and
+    the interpolated maps keep about a map cell more (None: the legs are not checked, only the trunk's box and the
+    feet's reach)."""
+    leg_height: float = 0.11
+    """Height above the feet, at the robot's lowest stance, at which the legs' rectangle is checked, metres: above
+    the steps the robot climbs (`step_height`), so only walls and side obstacles stand in its way."""
+
+
+def leg_rectangle(stance: np.ndarray, robot: RobotSpec, config: BodyCheckConfig) -> tuple[float, ...]:
+    """The legs' rectangle (x0, y0, x1, y1, z) in the body frame: the feet's `stance` points (n, 2) bounded and grown
+    by `leg_margin`, at `leg_height` above the feet of the lowest stance."""
+    lo, hi = stance.min(0) - config.leg_margin, stance.max(0) + config.leg_margin
+    return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]), config.leg_height - robot.body_height_range[0])
 
 
 def step_walls(maps: HeightMaps, step_height: float, gap: float) -> tuple[HeightMaps, int]:
@@ -168,6 +187,15 @@ class BodyChecker:
         self.stance_choices = np.stack([self.stance_points, inward, fore, aft])
         """(choices, feet, 3): where each foot may stand, in the body frame: nominal first, then inward, fore, aft."""
         self.height_range = robot.body_height_range
+        self.leg_points, self.leg_rectangle = np.zeros((0, 3)), None
+        """Points of the legs' rectangle in the body frame, and the rectangle as (x0, y0, x1, y1, z) (none when the
+        config does not check the legs)."""
+        if config.leg_margin is not None:
+            self.leg_rectangle = leg_rectangle(stance, robot, config)
+            lo, hi, depth = self.leg_rectangle[:2], self.leg_rectangle[2:4], self.leg_rectangle[4]
+            axes = [np.linspace(a, b, max(int(np.ceil((b - a) / (maps.resolution / 2))), 1) + 1) for a, b in zip(lo, hi)]
+            grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 2)
+            self.leg_points = np.concatenate([grid, np.full((len(grid), 1), depth)], 1)
 
     def _world(self, poses: np.ndarray, rot: np.ndarray, body_points: np.ndarray) -> np.ndarray:
         return poses[:, None, :3] + np.einsum("nij,pj->npi", rot, body_points)
@@ -218,6 +246,9 @@ class BodyChecker:
             too_low = np.nan_to_num(height, nan=lo).min(1) < lo - 1e-9
             too_high = np.nan_to_num(height, nan=hi).max(1) > hi + 1e-9
             code[too_low | too_high] = OUT_OF_REACH
+        if len(self.leg_points):
+            legs = self._world(poses, rot, self.leg_points)
+            code[np.nan_to_num(legs[..., 2] - self._surface(legs), nan=1.0).min(1) < 0] = LEGS_BLOCKED
         code[np.nan_to_num(bottom[..., 2] - floor, nan=1.0).min(1) < 0] = HITS_FLOOR
         code[np.nan_to_num(ceiling - top[..., 2], nan=1.0).min(1) < 0] = HITS_CEILING
         code[off] = OFF_MAP

@@ -245,17 +245,20 @@ def _check_endpoint(name: str, pose: np.ndarray, checker: BodyChecker, space: _S
                             "body fits at its x, y and heading (plan with --space full to keep its own tilt)")
 
 
-def _subdivide(vertices: np.ndarray, spacing: float, space) -> np.ndarray:
-    """Poses along a state-space polyline: every segment split into equal parts so that consecutive poses
-    are at most `spacing` apart, both in state space and in body-centre position."""
+def _subdivide(vertices: np.ndarray, spacing: float, space, check_step: float) -> np.ndarray:
+    """Poses along a state-space polyline: every segment split so that consecutive poses are at most `spacing` apart,
+    both in state space and in body-centre position. The split points are states the motion check visited (every
+    `check_step`), so each has a feasible pose even where the free band is narrower than the step between checks."""
     out = [space.to_poses(vertices[:1])]
     for a, b in zip(vertices[:-1], vertices[1:]):
-        n = max(int(math.ceil(np.linalg.norm(b - a) / spacing - 1e-9)), 1)
+        checked = max(int(math.ceil(np.linalg.norm(b - a) / check_step)), 1)  # as the motion validators sample
+        n = min(max(int(math.ceil(np.linalg.norm(b - a) / spacing - 1e-9)), 1), checked)
         while True:  # z follows the floor, so positions can be farther apart than states
-            poses = space.to_poses(a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a))
+            t = np.rint(np.linspace(0.0, checked, n + 1)) / checked
+            poses = space.to_poses(a + t[:, None] * (b - a))
             if np.isnan(poses).any():
                 raise PlanningError("internal: a waypoint between validated states has no feasible body pose")
-            if np.linalg.norm(np.diff(poses[:, :3], axis=0), axis=1).max() <= spacing + 1e-9:
+            if n >= checked or np.linalg.norm(np.diff(poses[:, :3], axis=0), axis=1).max() <= spacing + 1e-9:
                 break
             n += 1
         out.append(poses[1:])
@@ -355,7 +358,7 @@ def _finish(vertices, space, checker, start_pose, goal_pose, config: PlannerConf
             name: str) -> Plan:
     """The Plan of a solved state-space polyline: subdivided into waypoints and checked once more."""
     vertices[0], vertices[-1] = space.to_vector(start_pose), space.to_vector(goal_pose)
-    waypoints = _subdivide(vertices, config.spacing, space)
+    waypoints = _subdivide(vertices, config.spacing, space, config.check_step)
     waypoints[0], waypoints[-1] = start_pose, goal_pose  # exactly as asked (a projected space re-centres them)
     bad = np.flatnonzero(~checker.valid(waypoints))
     if bad.size:  # cannot happen if every motion was validated; refuse rather than hand out a colliding path

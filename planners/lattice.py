@@ -28,15 +28,18 @@ _LATTICES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """Per BodyChecker: {angle_weight: (valid nodes, graph)}, freed with the checker."""
 
 
-def _footprint(half_x: float, half_y: float, yaw: float, res: float) -> np.ndarray:
-    """Boolean kernel of the cells a rotated rectangle (half extents + one cell) may touch."""
+def _footprint(half_x: float, half_y: float, yaw: float, res: float, centre=(0.0, 0.0)) -> np.ndarray:
+    """Boolean kernel (centred on the body's cell) of the cells a rectangle may touch: half extents + one cell, centred
+    at `centre` in the body frame, the body turned by `yaw`."""
     hx, hy = half_x + res, half_y + res
-    reach = int(math.ceil((abs(hx * math.cos(yaw)) + abs(hy * math.sin(yaw))) / res)) + 1
-    reach_y = int(math.ceil((abs(hx * math.sin(yaw)) + abs(hy * math.cos(yaw))) / res)) + 1
+    cos, sin = math.cos(yaw), math.sin(yaw)
+    cx, cy = cos * centre[0] - sin * centre[1], sin * centre[0] + cos * centre[1]
+    reach = int(math.ceil((abs(cx) + abs(hx * cos) + abs(hy * sin)) / res)) + 1
+    reach_y = int(math.ceil((abs(cy) + abs(hx * sin) + abs(hy * cos)) / res)) + 1
     dx, dy = np.meshgrid(np.arange(-reach, reach + 1) * res, np.arange(-reach_y, reach_y + 1) * res, indexing="ij")
-    u = dx * math.cos(yaw) + dy * math.sin(yaw)
-    v = -dx * math.sin(yaw) + dy * math.cos(yaw)
-    return (np.abs(u) <= hx) & (np.abs(v) <= hy)
+    u = dx * cos + dy * sin
+    v = -dx * sin + dy * cos
+    return (np.abs(u - centre[0]) <= hx) & (np.abs(v - centre[1]) <= hy)
 
 
 def _shifted(field: np.ndarray, di: int, dj: int, fill: float) -> np.ndarray:
@@ -67,6 +70,10 @@ def valid_grid(checker: BodyChecker) -> np.ndarray:
         yaw = 2 * math.pi * k / YAW_BINS
         kernel = _footprint(hx, hy, yaw, res)
         low = ndimage.maximum_filter(floor, footprint=kernel, mode="constant", cval=np.inf) + hz
+        if checker.leg_rectangle is not None:  # the legs' rectangle at knee height above the floor too
+            x0, y0, x1, y1, depth = checker.leg_rectangle
+            legs = _footprint((x1 - x0) / 2, (y1 - y0) / 2, yaw, res, ((x0 + x1) / 2, (y0 + y1) / 2))
+            low = np.maximum(low, ndimage.maximum_filter(floor, footprint=legs, mode="constant", cval=np.inf) - depth)
         high = ndimage.minimum_filter(ceiling, footprint=kernel, mode="constant", cval=-np.inf) - hz
         if checker.config.check_heights:  # each foot's reach from the lowest and highest floor around it
             rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
@@ -76,7 +83,7 @@ def valid_grid(checker: BodyChecker) -> np.ndarray:
             starts = np.where(np.isnan(g_max), np.inf, g_max + lo)
             ends = np.where(np.isnan(g_min), -np.inf, g_min + hi)
             fits = np.flatnonzero(high >= low)  # only where the box fits, in chunks (the band is 272 numbers a cell)
-            for chunk in np.array_split(fits, max(1, len(fits) // 8192)):
+            for chunk in np.array_split(fits, max(1, len(fits) // 8192)) if len(fits) else []:
                 cell = np.unravel_index(chunk, floor.shape)
                 z_low, z_high = widest_band(low[cell], high[cell], starts[cell], ends[cell])
                 out[k][cell] = z_high >= z_low

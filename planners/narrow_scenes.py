@@ -3,19 +3,22 @@
 Every scene is a box tunnel (1 m wide inside, 4 m long, roof 0.6 m up) sampled by `maps_from_scene`:
 - `bar-<band>mm`: a bar across the tunnel whose underside leaves a band of feasible body heights
   `band` millimetres wide above the robot's lowest crouch;
-- `gap-<width>cm`: a block from one side wall leaving a gap `width` centimetres wide at the other;
+- `gap-<width>cm`: a block from one side wall leaving a gap `width` centimetres wide at the other, 15, 13 and 11
+  cm wider than the legs' rectangle (`BodyChecker.leg_rectangle`, the feet's stance; the maps' conservative
+  sampling and the planner's interpolated floor take about 10 cm of it at 2.5 cm resolution);
 - `bar-gap-<band>mm-<width>cm`: both, one after the other.
-Bands and gaps are computed from the robot's body box, margin and leg reach, so the scenes stay narrow
-for the robot the planner is given.
+Bands and gaps are computed from the robot's body box, legs, margins and leg reach, so the scenes stay
+narrow for the robot the planner is given.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 
 from legged.robots.spec import RobotSpec
 from legged.worlds.scenes import box
-from planners.body_check import BodyCheckConfig
+from planners.body_check import BodyCheckConfig, leg_rectangle, stance_points
 
 TUNNEL_HALF_WIDTH = 0.5
 """Half the inside width of every scene's tunnel, metres."""
@@ -64,19 +67,26 @@ def block(robot: RobotSpec, gap: float, x: float, side: float = 1.0) -> str:
     return box(f"block_{x:+.1f}", (x, y, 0.3), (0.15, length / 2, 0.3))
 
 
-def narrow_scenes(robot: RobotSpec) -> list[NarrowScene]:
-    """The benchmark's fixed scenes for `robot` (bands 20 to 1 mm, gaps 45 to 35 cm, and combinations)."""
+def narrow_scenes(robot: RobotSpec, body: BodyCheckConfig = BodyCheckConfig()) -> list[NarrowScene]:
+    """The benchmark's fixed scenes for `robot` (bands 20 to 1 mm, gaps 15 to 11 cm wider than its legs, and
+    combinations)."""
     z = sum(robot.body_height_range) / 2
     start, goal = (START[0], START[1], z), (-START[0], START[1], z)
+    if body.leg_margin is None:
+        width = 2 * (robot.body_box_half_extents[1] + body.margin)
+    else:
+        _, y0, _, y1, _ = leg_rectangle(stance_points(robot), robot, body)
+        width = y1 - y0
+    wide, middle, tight = (math.ceil(100 * (width + extra)) / 100 for extra in (0.15, 0.13, 0.11))
     scenes = []
     for band in (0.02, 0.01, 0.005, 0.003, 0.001):
         scenes.append(NarrowScene(f"bar-{band * 1000:g}mm", tunnel_xml([bar(robot, band, 0.0)]), start, goal))
-    for gap in (0.45, 0.40, 0.35):
-        scenes.append(NarrowScene(f"gap-{gap * 100:g}cm", tunnel_xml([block(robot, gap, 0.0)]), start, goal))
-    for gap in (0.40, 0.35):
+    for gap in (wide, middle, tight):
+        scenes.append(NarrowScene(f"gap-{gap * 100:.0f}cm", tunnel_xml([block(robot, gap, 0.0)]), start, goal))
+    for gap in (middle, tight):
         zigzag = [block(robot, gap, -0.5, 1.0), block(robot, gap, 0.5, -1.0)]
-        scenes.append(NarrowScene(f"zigzag-{gap * 100:g}cm", tunnel_xml(zigzag), start, goal))
-    for band, gap in ((0.005, 0.40), (0.003, 0.35)):
+        scenes.append(NarrowScene(f"zigzag-{gap * 100:.0f}cm", tunnel_xml(zigzag), start, goal))
+    for band, gap in ((0.005, middle), (0.003, tight)):
         both = [bar(robot, band, -0.5), block(robot, gap, 0.6)]
-        scenes.append(NarrowScene(f"bar-gap-{band * 1000:g}mm-{gap * 100:g}cm", tunnel_xml(both), start, goal))
+        scenes.append(NarrowScene(f"bar-gap-{band * 1000:g}mm-{gap * 100:.0f}cm", tunnel_xml(both), start, goal))
     return scenes

@@ -2,7 +2,7 @@
 
 For a body at (x, y, yaw) with a given roll and pitch, every constraint of `BodyChecker` bounds the body
 centre's height z from one side: a point of the box's underside must stay above the floor beneath it
-(z >= floor - offset), a point of its top below the ceiling above it (z <= ceiling - offset), and each
+(z >= floor - offset; so must the legs' rectangle at knee height), a point of its top below the ceiling above it (z <= ceiling - offset), and each
 foot's stance point within leg reach (lo <= z + offset - floor <= hi). The feasible heights are therefore
 one band [z_low, z_high], computed exactly in one vectorised pass. A planner that searches (x, y, yaw)
 only and puts the body in the middle of its band loses no pose of those tilts, and a band a few
@@ -31,20 +31,22 @@ class PoseBands:
         design = np.concatenate([np.ones((len(stance), 1)), stance], 1)
         self._fit = np.linalg.pinv(design)  # (3, n_feet)
         half_z = checker.half_extents[2]
-        self._bottom_face = checker.bottom_points[np.isclose(checker.bottom_points[:, 2], -half_z)]
+        face = checker.bottom_points[np.isclose(checker.bottom_points[:, 2], -half_z)]
+        self._bottom_face = np.concatenate([face, checker.leg_points])
+        self._bottom = np.concatenate([checker.bottom_points, checker.leg_points])
         self._top_face = checker.top_points[np.isclose(checker.top_points[:, 2], half_z)]
 
     def band(self, xy_yaw: np.ndarray, roll: np.ndarray, pitch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(z_low, z_high) of the body centre for poses (n, 3) = x, y, yaw at the given tilts (n,)."""
         c = self.checker
         rot = rotation_rpy(roll, pitch, xy_yaw[:, 2])
-        level = not (np.any(roll) or np.any(pitch))  # then only the bottom and top faces can touch
+        level = not (np.any(roll) or np.any(pitch))  # then only the bottom and top faces and the legs can touch
         def offsets(points):
             return np.einsum("nij,pj->npi", rot, points)
         def surface(off, ceiling=False):
             xy = xy_yaw[:, None, :2] + off[..., :2]
             return c.maps.lookup(xy.reshape(-1, 2), ceiling).reshape(off.shape[:2])
-        bottom = offsets(self._bottom_face if level else c.bottom_points)
+        bottom = offsets(self._bottom_face if level else self._bottom)
         top = offsets(self._top_face if level else c.top_points)
         low = np.max(surface(bottom) - bottom[..., 2], axis=1)
         high = np.min(surface(top, ceiling=True) - top[..., 2], axis=1)

@@ -14,20 +14,26 @@ PROBE = "probe_box"
 
 
 def with_probe_box(xml: str, half_extents, surfaces: list[str] | None = None) -> mujoco.MjModel:
-    """The scene plus a mocap body holding a box of `half_extents` that collides with the scene.
+    """The scene plus a mocap body holding a box of `half_extents`, paired explicitly with the scene's `surfaces`
+    (geom names; None: every geom of the scene that collides with anything, unnamed ones named here).
 
-    With `surfaces`, explicit contact pairs box-surface are added (scenes whose geoms do not collide
-    by contype/conaffinity, like the generated worlds); otherwise the box collides by contype.
+    Explicit contact pairs, because MuJoCo never collides two bodies welded to the world, and a mocap body is one.
     """
     root = ET.fromstring(xml)
     worldbody = root.find("worldbody")
+    if surfaces is None:
+        surfaces = []
+        for k, geom in enumerate(worldbody.iter("geom")):
+            if geom.get("contype") == "0" and geom.get("conaffinity") == "0":
+                continue  # decorative
+            geom.set("name", geom.get("name") or f"probed_{k}")
+            surfaces.append(geom.get("name"))
     body = ET.SubElement(worldbody, "body", name="probe", mocap="true", pos="0 0 5")
     ET.SubElement(body, "geom", name=PROBE, type="box", size=" ".join(f"{h:.6f}" for h in half_extents),
-                  contype="2" if surfaces else "1", conaffinity="2" if surfaces else "1", margin="0")
-    if surfaces:
-        contact = root.find("contact") if root.find("contact") is not None else ET.SubElement(root, "contact")
-        for surface in surfaces:
-            ET.SubElement(contact, "pair", geom1=PROBE, geom2=surface)
+                  contype="0", conaffinity="0", margin="0")
+    contact = root.find("contact") if root.find("contact") is not None else ET.SubElement(root, "contact")
+    for surface in surfaces:
+        ET.SubElement(contact, "pair", geom1=PROBE, geom2=surface)
     return mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
 
 

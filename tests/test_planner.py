@@ -150,6 +150,7 @@ def test_box_tunnel_scene_sampled_by_rays_is_planned_collision_free():
     data = mujoco.MjData(probe)
     for pose in plan.waypoints:
         assert probe_penetration(probe, data, pose) <= TOUCH_M, pose
+    assert probe_penetration(probe, data, plan.waypoints[len(plan.waypoints) // 2] + [0, 0, 0.4, 0, 0, 0]) > 0.01  # the roof
     under_beam = plan.waypoints[np.abs(plan.waypoints[:, 0] - 0.3) < 0.15]
     assert len(under_beam) and under_beam[:, 2].max() < 0.265  # it crouches under the 0.34 m beam
 
