@@ -148,7 +148,8 @@ def widest_band(low, high, starts, ends) -> tuple[np.ndarray, np.ndarray]:
     low, high = np.asarray(low, float), np.asarray(high, float)
     starts, ends = np.asarray(starts, float), np.asarray(ends, float)
     lead = low.shape
-    candidates = np.concatenate([low[..., None], starts.reshape(lead + (-1,))], -1)  # (..., K)
+    candidates = np.concatenate([low[..., None], starts.reshape(lead + (starts.shape[-2] * starts.shape[-1],))],
+                                -1)  # (..., K); lead may be empty
     s, e = starts[..., None, :, :], ends[..., None, :, :]                                # (..., 1, F, C)
     z = candidates[..., :, None, None]                                                   # (..., K, 1, 1)
     inside = (s <= z + 1e-12) & (e >= z - 1e-12)
@@ -192,10 +193,9 @@ class BodyChecker:
         config does not check the legs)."""
         if config.leg_margin is not None:
             self.leg_rectangle = leg_rectangle(stance, robot, config)
-            lo, hi, depth = self.leg_rectangle[:2], self.leg_rectangle[2:4], self.leg_rectangle[4]
-            axes = [np.linspace(a, b, max(int(np.ceil((b - a) / (maps.resolution / 2))), 1) + 1) for a, b in zip(lo, hi)]
-            grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 2)
-            self.leg_points = np.concatenate([grid, np.full((len(grid), 1), depth)], 1)
+            x0, y0, x1, y1, depth = self.leg_rectangle  # a flat box: its faces fill the rectangle
+            flat = box_surface_points(np.array([(x1 - x0) / 2, (y1 - y0) / 2, 0.0]), maps.resolution / 2)
+            self.leg_points = flat + np.array([(x0 + x1) / 2, (y0 + y1) / 2, depth])
 
     def _world(self, poses: np.ndarray, rot: np.ndarray, body_points: np.ndarray) -> np.ndarray:
         return poses[:, None, :3] + np.einsum("nij,pj->npi", rot, body_points)

@@ -83,7 +83,7 @@ def valid_grid(checker: BodyChecker) -> np.ndarray:
             starts = np.where(np.isnan(g_max), np.inf, g_max + lo)
             ends = np.where(np.isnan(g_min), -np.inf, g_min + hi)
             fits = np.flatnonzero(high >= low)  # only where the box fits, in chunks (the band is 272 numbers a cell)
-            for chunk in np.array_split(fits, max(1, len(fits) // 8192)) if len(fits) else []:
+            for chunk in np.array_split(fits, max(1, len(fits) // 8192)):
                 cell = np.unravel_index(chunk, floor.shape)
                 z_low, z_high = widest_band(low[cell], high[cell], starts[cell], ends[cell])
                 out[k][cell] = z_high >= z_low

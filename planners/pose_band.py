@@ -2,8 +2,9 @@
 
 For a body at (x, y, yaw) with a given roll and pitch, every constraint of `BodyChecker` bounds the body
 centre's height z from one side: a point of the box's underside must stay above the floor beneath it
-(z >= floor - offset; so must the legs' rectangle at knee height), a point of its top below the ceiling above it (z <= ceiling - offset), and each
-foot's stance point within leg reach (lo <= z + offset - floor <= hi). The feasible heights are therefore
+(z >= floor - offset; so must the legs' rectangle at knee height), a point of its top below the ceiling
+above it (z <= ceiling - offset), and each foot's stance point within leg reach (lo <= z + offset - floor
+<= hi). The feasible heights are therefore
 one band [z_low, z_high], computed exactly in one vectorised pass. A planner that searches (x, y, yaw)
 only and puts the body in the middle of its band loses no pose of those tilts, and a band a few
 millimetres wide (a bar just above the robot's lowest crouch) is found as easily as a wide one.
