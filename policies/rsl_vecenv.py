@@ -1,6 +1,6 @@
-"""rsl-rl's VecEnv over a `VectorEnv`: arrays cross between JAX and PyTorch through DLPack.
+"""rsl-rl's VecEnv over a `VectorEnv`: arrays cross from JAX to PyTorch through DLPack (shared memory, no copies),
+from PyTorch to JAX through NumPy on the CPU and DLPack elsewhere (`to_jax`).
 
-On a GPU both frameworks share the device memory (no copies); on the CPU DLPack shares host memory.
 Observation groups: the environment's (`state`, `privileged_state`, and `camera` or `history` where a task
 has them; policies.algorithms says who reads which), plus `latent_noise` for Gaussian-latent actors.
 `extras['time_outs']` marks episodes cut by the time limit (rsl-rl bootstraps their value); `extras['log']`
@@ -60,8 +60,17 @@ def to_torch(x: jax.Array, device: torch.device) -> torch.Tensor:
 
 
 def to_jax(t: torch.Tensor) -> jax.Array:
-    """A torch tensor as a JAX array through DLPack."""
-    return jax.dlpack.from_dlpack(t.detach().contiguous())
+    """A torch tensor as a JAX array: on the CPU through NumPy, on other devices through DLPack.
+
+    DLPack gives a JAX array committed to its device, and a jitted function's outputs are committed when any of
+    its inputs is, while the environment's reset makes uncommitted arrays: the first committed action would send
+    the step, and the first episode end the reset, to be compiled again (5 s of a go1-flat run's first minute on a
+    2-core CPU). A NumPy array becomes an uncommitted JAX array, so the loop keeps the programs it started with.
+    """
+    t = t.detach()
+    if t.device.type == "cpu":
+        return jnp.asarray(t.contiguous().numpy())
+    return jax.dlpack.from_dlpack(t.contiguous())
 
 
 class RslVecEnv(VecEnv):

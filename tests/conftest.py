@@ -2,15 +2,25 @@
 
 import os
 
-import jax
-import pytest
+# XLA compiles without its costly optimisation passes in the suite (also in the processes tests start): compiling,
+# not running, is most of the suite's time (736 -> 566 s of pytest wall time on 2 cores, 2026-12-06). The programs
+# run the same operations, slower, and may round differently in the last bits; `LEGGED_TEST_XLA_OPTIMIZE=1` keeps
+# the passes, e.g. to chase a difference between the suite and a real run.
+if os.environ.get("LEGGED_TEST_XLA_OPTIMIZE") != "1":
+    os.environ["JAX_DISABLE_MOST_OPTIMIZATIONS"] = "1"
 
-import legged  # noqa: F401  (quiet MJX import)
-from legged.tasks import make
-from legged.envs.config import NoiseConfig, RandomizationConfig
-from legged.envs.confined import ConfinedConfig, ConfinedEnv
-from legged.envs.physics import view_of_mjx
-from legged.worlds import Terrain, generate_world
+import jax  # noqa: E402  (after the environment above)
+import pytest  # noqa: E402
+
+jax.config.update("jax_disable_most_optimizations", os.environ.get("JAX_DISABLE_MOST_OPTIMIZATIONS") == "1")  # if a
+# plugin imported JAX before this file set the variable
+
+import legged  # noqa: E402,F401  (quiet MJX import)
+from legged.tasks import make  # noqa: E402
+from legged.envs.config import NoiseConfig, RandomizationConfig  # noqa: E402
+from legged.envs.confined import ConfinedConfig, ConfinedEnv  # noqa: E402
+from legged.envs.physics import view_of_mjx  # noqa: E402
+from legged.worlds import Terrain, generate_world  # noqa: E402
 
 BATCH = 8
 """Every test uses this one batch size: each new size would compile the env again (about a minute)."""
@@ -22,14 +32,14 @@ TINY_RUN = ["env.episode_seconds=0.2", "ppo.num_steps_per_env=5", "ppo.num_mini_
 iteration 2."""
 
 
-HEAVIEST_FILES = ("test_envs.py", "test_vision_distill.py", "test_mjx_randomized.py", "test_soccer_env.py",
-                  "test_dashboard.py", "test_training.py", "test_skills.py", "test_walker.py", "test_native.py",
-                  "test_soccer_training.py", "test_follower.py", "test_distill.py", "test_training_brax.py",
-                  "test_placo_player.py")
-"""Test files by their measured time, longest first (`--durations=0` on a slow 2-core machine, 2026-11-27, less
-what later cuts saved: test_envs ~1,100 s, test_vision_distill ~700, test_soccer_env ~600, ... down to ~200 s).
-They start first so that pytest-xdist's two workers end together: a long file handed out last keeps one worker
-busy after the other has finished. The other files follow in their usual order."""
+HEAVIEST_FILES = ("test_envs.py", "test_vision_distill.py", "test_dashboard.py", "test_walker.py", "test_soccer_env.py",
+                  "test_distributed.py", "test_skills.py", "test_mjx_randomized.py", "test_op3_randomize.py",
+                  "test_training.py", "test_native_raycam.py", "test_soccer_training.py", "test_steered.py",
+                  "test_native.py", "test_follower.py", "test_training_brax.py", "test_distill.py")
+"""Test files by their measured time, longest first (`--durations=0` on a 2-core machine, 2026-12-06: the group of
+test_envs.py ~180 s, test_vision_distill ~125, test_dashboard ~80, ... down to ~20 s). They start first so that
+pytest-xdist's two workers end together: a long file handed out last keeps one worker busy after the other has
+finished. The other files follow in their usual order."""
 
 
 SHARED_COMPILATIONS = {name: "go1-mjx" for name in ("test_envs.py", "test_mjx_vs_native.py", "test_native.py",

@@ -76,12 +76,19 @@ def test_adapter_shapes_time_outs_and_zero_copy(tiny_env):
     assert obs["state"].shape == (BATCH, 42) and obs["privileged_state"].shape == (BATCH, 74 + 41 + 2)  # + draws, cone
     assert obs["state"].dtype == torch.float32
     assert obs["state"].data_ptr() == venv._obs["state"].unsafe_buffer_pointer()  # DLPack: no copy
+    native = venv.vector.native
+    jitted = (native._spawn, native._first, native._carry, native._prepare, native._transition)
     for k in range(10):
         obs, rewards, dones, extras = venv.step(torch.zeros(BATCH, venv.num_actions))
         assert rewards.shape == (BATCH,) and dones.shape == (BATCH,)
+        if k == 0:
+            compiled = [f._cache_size() for f in jitted]
         if k < 9:
             assert not dones.any() and not extras["time_outs"].any() and extras["log"] == {}
     assert dones.all() and extras["time_outs"].all()  # the 0.2 s limit: time-outs, to be bootstrapped
+    # the programs of the first step and of the reset's warm-up serve every later step and reset (actions that
+    # came in committed to a device, as DLPack makes them, compiled the step and the reset again)
+    assert [f._cache_size() for f in jitted] == compiled
     assert extras["log"]["/episode/length"] == 10.0
     assert {"/episode/return", "/episode/reward/tracking_lin_vel"} <= set(extras["log"])
     assert (venv.episode_length_buf == 0).all()  # the environments were reset
