@@ -2,25 +2,24 @@
 
 import os
 
-# XLA compiles without its costly optimisation passes in the suite (also in the processes tests start): compiling,
-# not running, is most of the suite's time (736 -> 566 s of pytest wall time on 2 cores, 2026-12-06). The programs
-# run the same operations, slower, and may round differently in the last bits; `LEGGED_TEST_XLA_OPTIMIZE=1` keeps
-# the passes, e.g. to chase a difference between the suite and a real run.
-if os.environ.get("LEGGED_TEST_XLA_OPTIMIZE") != "1":
+import jax
+import pytest
+
+import legged  # noqa: F401  (quiet MJX import)
+from legged.tasks import make
+from legged.envs.config import NoiseConfig, RandomizationConfig
+from legged.envs.confined import ConfinedConfig, ConfinedEnv
+from legged.envs.physics import view_of_mjx
+from legged.worlds import Terrain, generate_world
+
+XLA_OPTIMIZE = os.environ.get("LEGGED_TEST_XLA_OPTIMIZE") == "1"
+"""XLA compiles without its costly optimisation passes in the suite, here and (through the environment variable) in
+the processes tests start: compiling, not running, is most of the suite's time (736 -> 566 s of pytest wall time on
+2 cores, 2026-12-06). The programs run the same operations, slower, and may round differently in the last bits;
+`LEGGED_TEST_XLA_OPTIMIZE=1` keeps the passes, e.g. to chase a difference between the suite and a real run."""
+jax.config.update("jax_disable_most_optimizations", not XLA_OPTIMIZE)
+if not XLA_OPTIMIZE:
     os.environ["JAX_DISABLE_MOST_OPTIMIZATIONS"] = "1"
-
-import jax  # noqa: E402  (after the environment above)
-import pytest  # noqa: E402
-
-jax.config.update("jax_disable_most_optimizations", os.environ.get("JAX_DISABLE_MOST_OPTIMIZATIONS") == "1")  # if a
-# plugin imported JAX before this file set the variable
-
-import legged  # noqa: E402,F401  (quiet MJX import)
-from legged.tasks import make  # noqa: E402
-from legged.envs.config import NoiseConfig, RandomizationConfig  # noqa: E402
-from legged.envs.confined import ConfinedConfig, ConfinedEnv  # noqa: E402
-from legged.envs.physics import view_of_mjx  # noqa: E402
-from legged.worlds import Terrain, generate_world  # noqa: E402
 
 BATCH = 8
 """Every test uses this one batch size: each new size would compile the env again (about a minute)."""
