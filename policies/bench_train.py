@@ -15,8 +15,9 @@ import tempfile
 from pathlib import Path
 
 from legged.bench import bench_rollout, machine, mid_episode_states, physics_profile
-from policies.config import TrainConfig, apply_overrides
+from policies.config import apply_overrides
 from policies.environments import build_env
+from policies.recipes import task_config
 from policies.run_dir import RunDir
 from policies.training import start_run
 
@@ -55,7 +56,7 @@ def bench_train(task: str, iterations: int = 10, num_envs: int = 1024, threads: 
     say = progress or (lambda msg: None)
     with tempfile.TemporaryDirectory(prefix="legged-bench-train-") as tmp:
         run_dir = Path(tmp) / "run"
-        probe = apply_overrides(TrainConfig(task=task, num_envs=num_envs, physics=physics).resolved(), list(overrides))
+        probe = apply_overrides(task_config(task, num_envs=num_envs, physics=physics), list(overrides))
         per_iteration = num_envs * probe.ppo.num_steps_per_env
         say(f"{task}: {iterations} PPO iterations of {num_envs} environments ({physics}, {threads} threads)")
         start_run(task, str(run_dir), num_envs=num_envs, timesteps=iterations * per_iteration, seed=seed,

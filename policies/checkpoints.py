@@ -57,16 +57,19 @@ def load_rsl_checkpoint(path: Path) -> dict:
 
 
 def save_rsl_checkpoint(run: RunDir, alg, iteration: int, step: int, obs_sizes: dict, num_actions: int,
-                        extra: dict | None = None, curriculum_levels: np.ndarray | None = None) -> Path:
+                        extra: dict | None = None, curriculum_levels: np.ndarray | None = None,
+                        randomization_scales: np.ndarray | None = None) -> Path:
     """Model, optimiser, counters, RNG state of the rsl-rl algorithm `alg`, what the task family adds (`extra`, e.g.
-    soccer self-play's `opponent_pool`; its arrays stored as tensors) and (terrain curricula) each environment's
-    level, written atomically."""
+    soccer self-play's `opponent_pool`; its arrays stored as tensors), (terrain curricula) each environment's
+    level and (a randomisation curriculum) each environment's scale, written atomically."""
     buffer = io.BytesIO()
     payload = {"backend": "rsl", "alg": alg.save(), "iteration": iteration, "step": step, "obs_sizes": obs_sizes,
                "num_actions": num_actions, "torch_rng": torch.get_rng_state()}
     payload.update({k: as_tensors(v) for k, v in (extra or {}).items()})
     if curriculum_levels is not None:
         payload["curriculum_levels"] = torch.from_numpy(np.array(curriculum_levels))  # a writable copy
+    if randomization_scales is not None:
+        payload["randomization_scales"] = torch.from_numpy(np.array(randomization_scales))
     torch.save(payload, buffer)
     return run.write_checkpoint(step, "pt", buffer.getvalue())
 

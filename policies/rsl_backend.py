@@ -70,9 +70,14 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     if levels is not None:  # every process's levels, in rank order; saved for another number of environments,
         levels = launch.own_rows(levels.numpy()) if len(levels) == config.num_envs else None  # they start afresh
     ramp = (lambda at: min(1.0, at / config.randomization_ramp)) if config.randomization_ramp else None
+    scales = None if payload is None else payload.get("randomization_scales")  # a curriculum's, as levels
+    if scales is not None:
+        scales = launch.own_rows(scales.numpy()) if len(scales) == config.num_envs else None
+    first_scale = (ramp(step) if ramp is not None else None if not config.randomization_curriculum
+                   else 0.0 if scales is None else scales)  # the first episodes' scale: the ramp's, or the curriculum's
     venv = hooks.wrap(RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device,
                                 latent_noise=config.latent.latent_dim if hib else 0, levels=levels,
-                                dr_scale=None if ramp is None else ramp(step)))
+                                dr_scale=first_scale, dr_step=config.randomization_curriculum))
     if config.random_episode_start:  # episodes end on different iterations
         generator = torch.Generator().manual_seed(config.seed + launch.rank + 7919 * iteration)
         venv.episode_length_buf = torch.randint(0, env.config.episode_steps, (local_envs,), generator=generator)
@@ -146,6 +151,8 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                       **{f"loss_{k}": float(v) for k, v in losses.items() if k != "symmetry"}, **diagnostics,
                       **timing, **hooks.record(venv), **({} if spread is None else {"process_spread": spread}),
                       **({} if scale is None else {"randomization_scale": scale}),
+                      **({"randomization_scale": venv.randomization_scales().mean().item()}
+                         if config.randomization_curriculum else {}),
                       **startup}
             startup = {}
             bar.update(per_iteration)
@@ -164,12 +171,15 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
             levels = venv.curriculum_levels() if checkpoint else None
             if levels is not None:
                 levels = launch.gather_rows(levels, device)  # every process takes part; rank 0 saves them all
+            scales = venv.randomization_scales() if checkpoint and config.randomization_curriculum else None
+            if scales is not None:
+                scales = launch.gather_rows(scales, device)
             if not launch.is_main:
                 continue
             run.log(record, writer)
             if checkpoint:
                 save_checkpoint(run, alg, iteration, step, obs_sizes, env.action_size, extra=hooks.saved_state(),
-                                curriculum_levels=levels)
+                                curriculum_levels=levels, randomization_scales=scales)
             saving = clock() - t_save
     finally:
         bar.close()

@@ -77,7 +77,8 @@ class RslVecEnv(VecEnv):
     """rsl-rl interface to a batch of MJX environments (auto-reset, time-outs, episode logs)."""
 
     def __init__(self, vector: VectorEnv, seed: int, device: str = "cpu", cfg: dict | None = None,
-                 latent_noise: int = 0, levels: np.ndarray | None = None, dr_scale: float | None = None):
+                 latent_noise: int = 0, levels: np.ndarray | None = None, dr_scale: float | np.ndarray | None = None,
+                 dr_step: float = 0.0):
         self.vector = vector
         self.latent_noise = latent_noise
         """Size of the standard-normal `latent_noise` observation drawn at every step (0: none)."""
@@ -90,8 +91,10 @@ class RslVecEnv(VecEnv):
         carry = None
         if levels is not None:  # a resumed run: every environment goes on at its curriculum level
             carry = level_carry(levels)
-        if dr_scale is not None:  # a randomisation ramp: the first episodes at its scale too
-            carry = {**(carry or {}), "dr_scale": jnp.full(self.num_envs, dr_scale, jnp.float32)}
+        if dr_scale is not None:  # a randomisation ramp or curriculum: the first episodes at its scale too
+            carry = {**(carry or {}), "dr_scale": jnp.asarray(np.broadcast_to(dr_scale, self.num_envs), jnp.float32)}
+        if dr_step:  # a curriculum: each episode's outcome moves its environment's scale (legged.envs.api)
+            carry["dr_step"] = jnp.full(self.num_envs, dr_step, jnp.float32)
         self.batch = vector.reset(jax.random.PRNGKey(seed), carry)
         self._obs = self.batch.state.obs
         self.episode_stats = EpisodeStats()
@@ -116,6 +119,10 @@ class RslVecEnv(VecEnv):
     def episode_length_buf(self, value: torch.Tensor) -> None:
         """Randomised initial episode lengths (rsl-rl's init_at_random_ep_len)."""
         self.batch.state.info["step"] = to_jax(value.to(torch.int32))
+
+    def randomization_scales(self) -> np.ndarray:
+        """Each environment's randomisation scale (a ramp's or curriculum's; 1 without either)."""
+        return np.asarray(jax.device_get(self.batch.state.info["dr_scale"]), np.float32)
 
     def set_randomization_scale(self, scale: float) -> None:
         """The randomisation scale of the episodes that start from now on (legged.envs.base.LeggedEnv.spawn)."""

@@ -23,7 +23,7 @@ from policies.run_dir import RunDir, RunDirError
 TRAINING_STATE = ("optimizer_state_dict", "rnd_optimizer_state_dict")
 """Parts of an rsl-rl learner's state (`alg`) that only further training reads: its optimisers."""
 
-RESUME_ONLY = ("opponent_pool", "curriculum_levels", "torch_rng")
+RESUME_ONLY = ("opponent_pool", "curriculum_levels", "randomization_scales", "torch_rng")
 """Entries of an rsl checkpoint that only a resumed run reads (policies.rsl_backend.train_rsl)."""
 
 

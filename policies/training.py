@@ -11,6 +11,7 @@ from legged.tasks import task_entry
 from policies.config import ConfigError, TrainConfig, apply_overrides
 from policies.distributed import Launch, init_jax_processes
 from policies.environments import build_env  # looked up when a run starts: tests replace it with a small env
+from policies.recipes import task_config
 from policies.rsl_backend import train_rsl
 from policies.run_dir import RunDir
 from policies.slim import refuse_slimmed
@@ -61,12 +62,13 @@ def _prepare(config: TrainConfig) -> bool:
     return launch.is_main
 
 
-def start_run(task: str, run_dir: str | None, backend: str = "rsl", num_envs: int = 256, timesteps: int = 1_000_000,
-              seed: int = 0, overrides: list[str] = (), progress: bool = True, physics: str = "mjx",
-              threads: int = 0, init_from: str = "", algo: str = "ppo") -> dict:
-    """Resolve the config, create the run directory, train; returns the last metrics record."""
-    config = TrainConfig(task=task, backend=backend, num_envs=num_envs, timesteps=timesteps, seed=seed,
-                         physics=physics, threads=threads, init_from=init_from, algo=algo).resolved()
+def start_run(task: str, run_dir: str | None, backend: str = "rsl", num_envs: int | None = None,
+              timesteps: int = 1_000_000, seed: int = 0, overrides: list[str] = (), progress: bool = True,
+              physics: str = "mjx", threads: int = 0, init_from: str = "", algo: str = "ppo") -> dict:
+    """Resolve the config (the task's recipe, then the arguments, then `overrides`; num_envs None: the recipe's or
+    TrainConfig's), create the run directory, train; returns the last metrics record."""
+    config = task_config(task, backend, num_envs=num_envs, timesteps=timesteps, seed=seed, physics=physics,
+                         threads=threads, init_from=init_from, algo=algo)
     config = apply_overrides(config, list(overrides))
     refuse_pilot(config)
     if config.init_from and not (Path(config.init_from) / "config.yaml").is_file():  # only when starting

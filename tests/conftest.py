@@ -26,9 +26,10 @@ BATCH = 8
 TINY_EPISODE_S = 0.2
 """Episodes of the tiny training runs: 10 control steps, so that episodes end inside a tiny run."""
 TINY_RUN = ["env.episode_seconds=0.2", "ppo.num_steps_per_env=5", "ppo.num_mini_batches=2", "checkpoint_every=1",
-            "ppo.actor_hidden=[32, 32]", "ppo.critic_hidden=[32, 32]"]
+            "ppo.actor_hidden=[32, 32]", "ppo.critic_hidden=[32, 32]", "random_episode_start=false",
+            "randomization_curriculum=0"]
 """Overrides of the tiny go1-flat runs: 8 envs x 5 steps = 40 env steps per iteration; episodes end in
-iteration 2."""
+iteration 2 (the go1-flat recipe's random episode start and randomisation curriculum off: tests/test_recipes.py)."""
 
 
 HEAVIEST_FILES = ("test_envs.py", "test_vision_distill.py", "test_dashboard.py", "test_walker.py", "test_soccer_env.py",

@@ -310,3 +310,38 @@ def test_a_ramp_scale_moves_each_draw_from_the_nominal_robot_to_the_draw():
             TrainConfig(task="go1-flat", **bad).resolved()
     with pytest.raises(ConfigError, match="Go1 tasks"):
         TrainConfig(task="soccer-1v1", randomization_ramp=10).resolved()
+
+
+def test_a_randomisation_curriculum_moves_each_scale_by_the_episode_outcome():
+    """With a carried dr_step, an episode's next scale goes up a step after a mastered episode (go1 tracking: its
+    time limit run, mean velocity error under half the command plus 5 cm/s), down after a fall, and stays after
+    an episode that ran its time but tracked badly (standing still); always within [0, 1]. Without dr_step the
+    scale is handed on unchanged (the ramp's)."""
+    from legged.envs.api import next_carry
+    from legged.tasks import make
+    from policies.config import TrainConfig
+    from policies.config_io import ConfigError
+
+    env = make("go1-flat")
+    info = env.spawn(jax.random.PRNGKey(0), {"dr_scale": jnp.float32(0.5), "dr_step": jnp.float32(0.1)}).info
+    assert float(info["dr_step"]) == pytest.approx(0.1)
+    steps = jnp.int32(1000)
+    command = jnp.array([0.8, 0.0, 0.0])
+
+    def ended(truncation, mean_error, scale=0.5):
+        return {**info, "truncation": jnp.float32(truncation), "step": steps, "command": command,
+                "tracking_error_sum": jnp.float32(mean_error) * steps, "dr_scale": jnp.float32(scale)}
+
+    scale = lambda i: float(next_carry(env, i)["dr_scale"])
+    assert scale(ended(1.0, 0.2)) == pytest.approx(0.6)   # tracked: 0.2 < 0.5 * 0.8 + 0.05
+    assert scale(ended(0.0, 0.2)) == pytest.approx(0.4)   # fell
+    assert scale(ended(1.0, 0.8)) == pytest.approx(0.5)   # stood still through an asked 0.8 m/s
+    assert scale(ended(1.0, 0.2, scale=0.95)) == pytest.approx(1.0)
+    assert scale(ended(0.0, 0.2, scale=0.05)) == pytest.approx(0.0)
+    assert next_carry(env, ended(1.0, 0.2))["dr_step"] == pytest.approx(0.1)
+    ramp = {k: v for k, v in ended(1.0, 0.2).items() if k != "dr_step"}
+    assert scale(ramp) == pytest.approx(0.5) and "dr_step" not in next_carry(env, ramp)
+    for bad, match in (({"randomization_curriculum": 1.5}, r"\[0, 1\]"),
+                       ({"randomization_curriculum": 0.1, "randomization_ramp": 10}, "choose one")):
+        with pytest.raises(ConfigError, match=match):
+            TrainConfig(task="go1-flat", **bad).resolved()

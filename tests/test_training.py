@@ -200,6 +200,28 @@ def test_a_randomisation_ramp_grows_with_the_steps_trained(tiny_env, tmp_path, m
     assert [r["randomization_scale"] for r in RunDir(tmp_path / "run").metrics()] == [0.0, 0.25, 0.5, 0.75]
 
 
+def test_a_randomisation_curriculum_is_saved_and_resumed(tiny_env, tmp_path, monkeypatch):
+    """With randomization_curriculum, the mean scale is logged with every record, each environment's scale is saved
+    with each checkpoint, and a resumed run starts its environments at the saved scales (the first run at 0)."""
+    monkeypatch.setattr(training, "build_env", lambda config: tiny_env)
+    started = []
+    monkeypatch.setattr(RslVecEnv, "__init__", lambda self, *a, original=RslVecEnv.__init__, **k: (
+        started.append((k["dr_scale"], k["dr_step"])), original(self, *a, **k))[1])
+    overrides = [o for o in TINY if not o.startswith("randomization_curriculum")] + ["randomization_curriculum=0.5"]
+    with torch_threads_kept():
+        training.start_run("go1-flat", str(tmp_path / "run"), num_envs=BATCH, timesteps=120, progress=False,
+                           overrides=overrides, physics="native", threads=1)
+        run = RunDir(tmp_path / "run")
+        saved = torch.load(run.latest_checkpoint(), weights_only=False)["randomization_scales"].numpy()
+        config = tmp_path / "run" / "config.yaml"
+        config.write_text(config.read_text().replace("timesteps: 120\n", "timesteps: 160\n"))
+        training.resume_run(str(tmp_path / "run"), progress=False)
+    assert saved.shape == (BATCH,) and np.all((saved >= 0) & (saved <= 1)) and np.all(saved * 2 == np.round(saved * 2))
+    assert started[0] == (0.0, 0.5) and np.array_equal(started[1][0], saved) and started[1][1] == 0.5
+    logged = [r["randomization_scale"] for r in run.metrics()]
+    assert len(logged) == 4 and logged[2] == pytest.approx(saved.mean())
+
+
 def test_confined_summary_metrics():
     finals = [{"return": 1.0, "length": 5, "success": 1.0, "time_to_goal_s": 4.0, "collisions": 2.0,
                "final_distance_m": 0.1, "reward/exploration": 0.5},

@@ -173,7 +173,8 @@ def build_parser() -> argparse.ArgumentParser:
     tr = sub.add_parser("train", help="train a policy (Brax PPO or rsl-rl PPO) into a run directory")
     tr.add_argument("task", nargs="?", help="task name (legged tasks)")
     tr.add_argument("--backend", choices=["rsl", "brax"], default="rsl")
-    tr.add_argument("--num-envs", type=bounded(int, 1, 2**20), default=256)
+    tr.add_argument("--num-envs", type=bounded(int, 1, 2**20), default=None,
+                    help="parallel environments (default: the task's recipe, else 256)")
     tr.add_argument("--timesteps", type=bounded(int, 1, 10**12), default=1_000_000,
                     help="environment steps, all envs together")
     tr.add_argument("--seed", type=SEED, default=0)

@@ -57,6 +57,11 @@ class MjxEnv(Env, abc.ABC):
         curriculum level; {} by default."""
         return {}
 
+    def mastered(self, info: dict) -> jax.Array:
+        """Whether the episode that just ended (its `info`) met the task well enough for a randomisation curriculum
+        to make the next one harder (legged.envs.api.next_carry); by default, that it ran to its time limit."""
+        return info["truncation"] > 0.5
+
     # ----------------------------------------------------------------- engine read-outs
     def mjx_model_for(self, info: dict):
         """The MJX model of an episode (its randomisation applied)."""
@@ -170,6 +175,16 @@ class MjxEnv(Env, abc.ABC):
 
 def next_carry(env, info: dict) -> dict:
     """What the engines hand an environment's next episode: `env.carry(info)` and, where the episode has one, its
-    randomisation scale (`dr_scale`: a training run's ramp, legged.envs.base.LeggedEnv.spawn)."""
+    randomisation scale (`dr_scale`: a training run's ramp, legged.envs.base.LeggedEnv.spawn). An episode with a
+    `dr_step` (a training run's randomisation curriculum) moves its scale by that step within [0, 1]: up after an
+    episode the task counts as mastered (`env.mastered(info)`), down after one that ended in a fall or failure."""
     carry = env.carry(info)
-    return {**carry, "dr_scale": info["dr_scale"]} if "dr_scale" in info else carry
+    if "dr_scale" not in info:
+        return carry
+    scale = info["dr_scale"]
+    if "dr_step" in info:
+        up = env.mastered(info)
+        down = (info["truncation"] < 0.5) & ~up
+        scale = jnp.clip(scale + info["dr_step"] * (up.astype(jnp.float32) - down.astype(jnp.float32)), 0.0, 1.0)
+        return {**carry, "dr_scale": scale, "dr_step": info["dr_step"]}
+    return {**carry, "dr_scale": scale}

@@ -254,8 +254,10 @@ class LeggedEnv(MjxEnv, abc.ABC):
         return self._contacts(data)
 
     def spawn(self, rng: jax.Array, carry: dict | None = None) -> Spawn:
-        """A new episode; a carried `dr_scale` (a training run's randomisation ramp, TrainConfig.randomization_ramp)
-        moves its randomisation that part of the way from the nominal robot to the draw, pushes included."""
+        """A new episode; a carried `dr_scale` (a training run's randomisation ramp or curriculum,
+        TrainConfig.randomization_ramp and randomization_curriculum) moves its randomisation that part of the way
+        from the nominal robot to the draw, pushes included; a carried `dr_step` (the curriculum's) stays in `info`
+        for the next episode's scale (legged.envs.api.next_carry)."""
         rng, k_dr, k_task = jax.random.split(rng, 3)
         dr = self.randomize(k_dr)
         ramped = carry is not None and "dr_scale" in carry
@@ -268,6 +270,8 @@ class LeggedEnv(MjxEnv, abc.ABC):
         info = dict(rng=rng, dr=dr, last_action=jnp.zeros(self.action_size), last_qvel=jnp.zeros(self.action_size),
                     step=jnp.int32(0), collisions=jnp.float32(0.0), touching=jnp.zeros(1 + len(self._calf_bodies), bool),
                     truncation=jnp.float32(0.0), dr_scale=scale, **task_info)
+        if ramped and "dr_step" in carry:  # a randomisation curriculum: the scale moves with each episode's outcome
+            info["dr_step"] = carry["dr_step"]
         if self.pushes:
             info["teleported"] = jnp.bool_(False)
         return Spawn(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv), ctrl=self._default_pose, info=info)
