@@ -254,8 +254,8 @@ class TrainConfig:
             raise ConfigError("randomization_ramp and randomization_curriculum are for --backend rsl (Brax PPO resets "
                               "its environments itself)")
         if (cfg.randomization_ramp or cfg.randomization_curriculum) and isinstance(cfg.env, SoccerConfig):
-            raise ConfigError(f"randomization_ramp and randomization_curriculum are for the Go1 tasks; {cfg.task} draws "
-                              "its robots' randomisation in its game (soccer.env)")
+            raise ConfigError(f"randomization_ramp and randomization_curriculum are for the Go1 tasks; {cfg.task} "
+                              "draws its robots' randomisation in its game (soccer.env)")
         if cfg.backend == "brax" and cfg.ppo.mixed_precision:
             raise ConfigError("ppo.mixed_precision is for --backend rsl (rsl-rl's bfloat16 update); Brax trains in "
                               "float32")

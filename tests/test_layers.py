@@ -174,7 +174,7 @@ nothing of legged)."""
 
 POLICIES_ORDER = [
     ("run files", ("policies", "policies.config_io", "policies.config", "policies.soccer", "policies.soccer.config",
-                   "policies.run_dir", "policies.distributed")),
+                   "policies.recipes", "policies.run_dir", "policies.distributed")),
     ("checkpoints", ("policies.checkpoints", "policies.slim")),
     ("models", ("policies.algorithms", "policies.latent_models", "policies.memory_models", "policies.hib",
                 "policies.teacher_kl", "policies.students", "policies.warm_start", "policies.probe",
@@ -189,7 +189,7 @@ POLICIES_ORDER = [
                        "policies.bench_encoder", "policies.bench_train", "policies.learning_curve")),
 ]
 """The groups of `policies`, lowest first, as LEGGED_ORDER: run files (config I/O, configs, the soccer section of
-the config, run directories, the process launch) < checkpoints (the data-only formats, their weights-only form) <
+the config, the tasks' recipes, run directories, the process launch) < checkpoints (the data-only formats, their weights-only form) <
 models (networks, the HIB and teacher-KL losses, the students' distillation losses and starts, warm starts, the
 linear probe, self-play snapshots) < policy loading < the environments runs train and play in (a pilot's steered game
 among them) and the hooks through which a task family adds to the training loop < trainer backends < orchestration
