@@ -37,6 +37,13 @@ from policies.training_hooks import TrainingHooks
 from policies.warm_start import warm_start
 
 
+def _saved_rows(payload: dict | None, key: str, launch, num_envs: int):
+    """This process's rows of a checkpoint's per-environment entry `key` (every process's, in rank order), or None
+    when there is none or it was saved for another number of environments (they start afresh)."""
+    rows = None if payload is None else payload.get(key)
+    return None if rows is None or len(rows) != num_envs else launch.own_rows(rows.numpy())
+
+
 def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progress: bool = True,
               hooks: TrainingHooks | None = None) -> dict:
     """Train (or continue training) `env` with rsl-rl (PPO or a distillation); returns the last metrics record.
@@ -66,15 +73,14 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     vector = VectorEnv.of(hooks.played_env(env), local_envs, config.physics, threads)
     key = jax.random.fold_in(jax.random.fold_in(jax.random.PRNGKey(config.seed), iteration), launch.rank)
     hib = config.algo in ("hib", "hib-no-ib")
-    levels = None if payload is None else payload.get("curriculum_levels")
-    if levels is not None:  # every process's levels, in rank order; saved for another number of environments,
-        levels = launch.own_rows(levels.numpy()) if len(levels) == config.num_envs else None  # they start afresh
+    levels = _saved_rows(payload, "curriculum_levels", launch, config.num_envs)
     ramp = (lambda at: min(1.0, at / config.randomization_ramp)) if config.randomization_ramp else None
-    scales = None if payload is None else payload.get("randomization_scales")  # a curriculum's, as levels
-    if scales is not None:
-        scales = launch.own_rows(scales.numpy()) if len(scales) == config.num_envs else None
-    first_scale = (ramp(step) if ramp is not None else None if not config.randomization_curriculum
-                   else 0.0 if scales is None else scales)  # the first episodes' scale: the ramp's, or the curriculum's
+    first_scale = None  # the first episodes' randomisation scale: the ramp's, or the curriculum's (0 when new)
+    if ramp is not None:
+        first_scale = ramp(step)
+    elif config.randomization_curriculum:
+        scales = _saved_rows(payload, "randomization_scales", launch, config.num_envs)
+        first_scale = 0.0 if scales is None else scales
     venv = hooks.wrap(RslVecEnv(vector, seed=int(jax.random.randint(key, (), 0, 2**30)), device=device,
                                 latent_noise=config.latent.latent_dim if hib else 0, levels=levels,
                                 dr_scale=first_scale, dr_step=config.randomization_curriculum))
@@ -168,12 +174,11 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
                        "No checkpoint was written yet."))
             t_save = clock()
             checkpoint = iteration % config.checkpoint_every == 0 or iteration == iterations
+            # every process takes part in gathering each environment's row; rank 0 saves them all
             levels = venv.curriculum_levels() if checkpoint else None
-            if levels is not None:
-                levels = launch.gather_rows(levels, device)  # every process takes part; rank 0 saves them all
-            scales = venv.randomization_scales() if checkpoint and config.randomization_curriculum else None
-            if scales is not None:
-                scales = launch.gather_rows(scales, device)
+            levels = None if levels is None else launch.gather_rows(levels, device)
+            scales = launch.gather_rows(venv.randomization_scales(), device) if (
+                checkpoint and config.randomization_curriculum) else None
             if not launch.is_main:
                 continue
             run.log(record, writer)
