@@ -26,8 +26,8 @@ ALIASES = {"command/dx": "command/vx", "command/dy": "command/vy", "command/dyaw
 """Inputs of the target task that read the weights of a differently named input of the source task."""
 
 ADAPT_SAMPLES = 1_000_000
-"""Normaliser sample count after the warm start: its statistics then follow the new task's observations
-within the first few dozen iterations instead of staying the source task's."""
+"""Normaliser sample count after a warm start from another task, or into a network with inputs the source lacks: its
+statistics then follow the new observations within the first few dozen iterations instead of staying the source's."""
 
 
 def element_names(layout: list[tuple[str, int]]) -> list[str]:
@@ -53,8 +53,10 @@ def input_map(source: list[str], target: list[str]) -> np.ndarray:
 
 
 def _rebuild(source: dict, target: dict, mapping: np.ndarray, fresh_mean: torch.Tensor,
-             fresh_std: torch.Tensor) -> dict:
-    """Target network state: first layer and normaliser rebuilt through `mapping`, the rest copied."""
+             fresh_std: torch.Tensor, keep_count: bool = False) -> dict:
+    """Target network state: first layer and normaliser rebuilt through `mapping`, the rest copied. The
+    normaliser's sample count restarts at ADAPT_SAMPLES unless `keep_count` (its statistics already describe these
+    observations)."""
     out = dict(target)
     known = torch.as_tensor(mapping >= 0)
     src_idx = torch.as_tensor(np.maximum(mapping, 0))
@@ -66,7 +68,8 @@ def _rebuild(source: dict, target: dict, mapping: np.ndarray, fresh_mean: torch.
             fresh = {"_mean": fresh_mean, "_var": fresh_std ** 2, "_std": fresh_std}[key].reshape(1, -1)
             out[name] = torch.where(known[None, :], source[name][:, src_idx], fresh)
     if "obs_normalizer.count" in out:
-        out["obs_normalizer.count"] = torch.tensor(ADAPT_SAMPLES, dtype=out["obs_normalizer.count"].dtype)
+        count = source["obs_normalizer.count"] if keep_count and "obs_normalizer.count" in source else ADAPT_SAMPLES
+        out["obs_normalizer.count"] = torch.as_tensor(count, dtype=out["obs_normalizer.count"].dtype)
     for name, value in source.items():
         if name == "mlp.0.weight" or name.startswith("obs_normalizer"):
             continue
@@ -126,12 +129,17 @@ def warm_start(alg, run_path: Path, env, obs, task: str = "") -> str:
     if not hasattr(env, "observation_layout"):
         raise RunDirError(f"cannot warm start this task ({type(env).__name__}): it has no named observation layout")
     layout, path = source_layout(run_path)
+    same_task = RunDir(Path(run_path)).load_config().task == task
     saved = load_rsl_checkpoint(path)["alg"]
     target_layout = env.observation_layout()
     report = []
     for net, group, key in ((alg.actor, "state", "actor_state_dict"), (alg.critic, "privileged_state", "critic_state_dict")):
         mapping = input_map(element_names(layout[group]), element_names(target_layout[group]))
         x = obs[group].float()
-        net.load_state_dict(_rebuild(saved[key], net.state_dict(), mapping, x.mean(0), x.std(0).clamp_min(1e-2)))
+        # the same task's inputs, all from the source: their statistics stay as settled as they were (restarting
+        # the count lets the first iterations' observations, e.g. a curriculum's easiest level, pull them away)
+        keep = same_task and bool((mapping >= 0).all())
+        net.load_state_dict(_rebuild(saved[key], net.state_dict(), mapping, x.mean(0), x.std(0).clamp_min(1e-2),
+                                     keep))
         report.append(f"{group}: {int((mapping >= 0).sum())} of {len(mapping)} inputs from the source")
     return f"warm start from {path}: " + "; ".join(report)

@@ -16,7 +16,7 @@ from legged.tasks import make
 from policies.config import PPOConfig
 from policies.evaluate import confined_eval_config, one_tile_each, wilson_interval
 from policies.rsl_backend import build_ppo, dummy_observations
-from policies.warm_start import element_names, input_map, warm_start
+from policies.warm_start import ADAPT_SAMPLES, element_names, input_map, warm_start
 from tests.warm_support import saved_actor, warm_started
 
 WALKER = Path(__file__).resolve().parents[1] / "assets" / "policies" / "go1-flat-walker-v1"
@@ -125,7 +125,9 @@ def test_warm_start_from_the_same_task_copies_every_weight():
 
 def test_warm_start_of_the_same_task_with_randomisation_draws_keeps_the_policy():
     """go1-flat as it now trains (the randomisation's draws appended to the privileged state) from the walker trained
-    without: the actor is copied whole, the critic's old inputs keep their weights and the new ones start at zero."""
+    without: the actor is copied whole, its normaliser's sample count too (a fine-tune's first observations must not
+    pull settled statistics away); the critic's old inputs keep their weights, the new ones start at zero and its
+    normaliser adapts."""
     env = make("go1-flat")
     sizes = env.observation_dims()
     obs = dummy_observations(sizes, 8)
@@ -135,8 +137,8 @@ def test_warm_start_of_the_same_task_with_randomisation_draws_keeps_the_policy()
     assert "42 of 42" in note and f"74 of {sizes['privileged_state']}" in note, note
     payload = torch.load(sorted((WALKER / "checkpoints").glob("*.pt"))[-1], weights_only=True)["alg"]
     for name, value in new.actor.state_dict().items():
-        if name != "obs_normalizer.count":
-            assert torch.equal(value, payload["actor_state_dict"][name]), name
+        assert torch.equal(value, payload["actor_state_dict"][name]), name
+    assert int(new.critic.state_dict()["obs_normalizer.count"]) == ADAPT_SAMPLES
     first = new.critic.state_dict()["mlp.0.weight"]
     assert torch.equal(first[:, :74], payload["critic_state_dict"]["mlp.0.weight"])
     assert torch.count_nonzero(first[:, 74:]) == 0

@@ -1,6 +1,7 @@
 """Level worlds d0-d4: reproducibility, what each level holds, clearance, free ends, MJCF agreement, planning."""
 
 import functools
+import hashlib
 import math
 
 import mujoco
@@ -160,6 +161,38 @@ def test_block_groups_are_slaloms_from_alternate_walls():
     assert all(len(f.solids) == 1 for lay in single for f in lay.features if f.kind == "block")
     with pytest.raises(WorldError, match="block_pitch"):
         LevelConfig(block_group=(1, 3), block_pitch=(0.5, 1.0)).validate()
+
+
+BEND_BLOCKS = LevelConfig(bend_blocks=1.0)
+
+
+def test_bend_blocks_sit_against_the_bends():
+    """With bend_blocks 1, a corridor wide enough for blocks gets one ending where a bend's zone begins and one
+    beginning where it ends (where they fit), solid in the maps; 0 draws the worlds of older runs, bit for bit."""
+    against = 0
+    for seed in range(60):
+        lay = level_layout(seed, 3, BEND_BLOCKS)
+        if not lay.bends or lay.width < CFG.block_corridor_width:
+            continue
+        blocks = [f for f in lay.features if f.kind == "block"]
+        corners = np.cumsum(np.linalg.norm(np.diff(lay.centre_line, axis=0), axis=1))[:-1] - lay.end_margin
+        for s_bend, angle in zip(corners, lay.bends):
+            zone = lay.width / 2 * math.tan(math.radians(abs(angle)) / 2) + 0.1
+            against += sum(np.isclose(f.end, s_bend - zone) or np.isclose(f.begin, s_bend + zone) for f in blocks)
+        if seed < 20:
+            world = generate_level(seed, 3, BEND_BLOCKS)
+            for sc, v, _, _, _ in (solid for f in blocks for solid in f.solids):
+                cell = lay.point(sc) + math.copysign(1.0, v) * (lay.width / 2 - 0.1) * _left(lay, sc)
+                assert _cell_value(world, world.floor, cell) == _cell_value(world, world.ceiling, cell)
+    assert against >= 20
+    digest = hashlib.sha256()
+    for seed in range(8):  # the default (0): the level 3 and 4 maps of the generator before bend_blocks
+        for level in (3, 4):
+            w = generate_level(seed, level)
+            digest.update(np.ascontiguousarray(w.floor).tobytes() + np.ascontiguousarray(w.ceiling).tobytes())
+    assert digest.hexdigest()[:16] == "85f52ca3e30ff725"
+    with pytest.raises(WorldError, match="bend_blocks"):
+        LevelConfig(bend_blocks=1.5).validate()
 
 
 def _left(layout, s):

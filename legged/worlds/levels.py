@@ -9,7 +9,8 @@
   up to that many from alternate walls) and pillar groups (2-5 square or round columns 0.1-0.25 m across, at least
   0.45 m from each other and the walls).
 - d3: d2 plus 1-2 steps (3-10 cm up or down, for good) or ramps (5-15 degrees, at most 10 cm up or down), and the
-  centre line may turn: an L (one bend) or an S (two opposite bends), each bend 30-90 degrees.
+  centre line may turn: an L (one bend) or an S (two opposite bends), each bend 30-90 degrees; with `bend_blocks`
+  above 0, side blocks right before and after a bend make the path turn sharply between obstacles.
 - d4: d3 plus 1-2 voids: gaps across the floor 10-25 cm long and 0.1-1.0 m deep.
 
 The ranges are the fields of `LevelConfig`. A world is drawn in two steps: `level_layout` draws the corridor and
@@ -107,6 +108,10 @@ class LevelConfig:
     """Shares of level 3 and 4 worlds whose centre line makes an L and an S turn (the rest are straight)."""
     bend_angle: tuple[float, float] = (30.0, 90.0)
     """Angle of each bend of a turn."""
+    bend_blocks: float = 0.0
+    """Chance that a side block (a slalom as `block_group` draws) ends where a bend's zone begins, and, drawn
+    apart, that one begins where it ends (corridors at least `block_corridor_width` wide; 0: the worlds of runs saved
+    before this field)."""
     voids: tuple[int, int] = (1, 2)
     """Number of voids at level 4."""
     void_width: tuple[float, float] = (0.10, 0.25)
@@ -136,9 +141,10 @@ class LevelConfig:
                 raise WorldError(f"{name} {getattr(self, name)} reaches below min_clearance {self.min_clearance}")
         if self.open_sky < self.roof[1]:
             raise WorldError(f"open_sky {self.open_sky} lies below the highest roof {self.roof[1]}")
-        if not (0 <= self.open_sky_fraction <= 1 and 0 <= self.crawl_fraction <= 1
+        if not (0 <= self.open_sky_fraction <= 1 and 0 <= self.crawl_fraction <= 1 and 0 <= self.bend_blocks <= 1
                 and min(self.turn_fractions) >= 0 and sum(self.turn_fractions) <= 1):
-            raise WorldError("open_sky_fraction, crawl_fraction and turn_fractions must be shares in [0, 1]")
+            raise WorldError("open_sky_fraction, crawl_fraction, bend_blocks and turn_fractions must be shares in "
+                             "[0, 1]")
         if self.width[0] <= 0 or self.pillar_corridor_width < 2 * self.min_gap + self.pillar_size[1]:
             raise WorldError(f"need width > 0 and pillar_corridor_width >= 2 * min_gap + the largest pillar "
                              f"({2 * self.min_gap + self.pillar_size[1]:.2f} m)")
@@ -292,6 +298,36 @@ def _block_group(rng, c: LevelConfig, width: float) -> tuple[float, float, tuple
     return solids[-1][0] + solids[-1][2], min(gaps), tuple(solids)
 
 
+def _fit_group(solids: tuple, gap: float, width: float, room: float) -> tuple[tuple, float]:
+    """The blocks of a group (solids relative to its begin) that fit in `room` of route (at least the first), and
+    the narrowest gap the kept ones leave."""
+    if solids[-1][0] + solids[-1][2] <= room:
+        return solids, gap
+    while len(solids) > 1 and solids[-1][0] + solids[-1][2] > room:
+        solids = solids[:-1]
+    return solids, min(width / 2 + abs(v) - hv for _, v, _, hv, _ in solids)
+
+
+def _bend_blocks(rng, c: LevelConfig, width: float, free: list, zone: tuple[float, float]) -> tuple[list, list]:
+    """(free intervals left, block features) for the blocks `bend_blocks` puts against a bend's `zone` (begin, end):
+    one ending where the zone begins, one beginning where it ends, each drawn apart and kept where it fits."""
+    features = []
+    for before in (True, False):
+        if rng.uniform() >= c.bend_blocks:
+            continue
+        _, gap, solids = _block_group(rng, c, width)
+        room = next((hi - lo for lo, hi in free if abs((hi if before else lo) - zone[0 if before else 1]) < 1e-9), 0.0)
+        solids, gap = _fit_group(solids, gap, width, room)
+        size = solids[-1][0] + solids[-1][2]
+        if size > room:
+            continue
+        begin = zone[0] - size if before else zone[1]
+        free = _take(free, begin - c.feature_spacing * before, begin + size + c.feature_spacing * (not before))
+        features.append(Feature("block", begin, begin + size, float(gap),
+                                tuple((begin + s, v, hs, hv, r) for s, v, hs, hv, r in solids)))
+    return free, features
+
+
 def level_layout(seed: int, level: int, config: LevelConfig = LevelConfig()) -> Layout:
     """The layout of level world (seed, level) for levels 1-4; the same inputs always give the same layout."""
     config.validate()
@@ -346,17 +382,16 @@ def level_layout(seed: int, level: int, config: LevelConfig = LevelConfig()) -> 
             if begin is not None:
                 free = _take(free, begin, begin + size)
                 bends.append((begin + size / 2, value))
+                if c.bend_blocks > 0 and width >= c.block_corridor_width:
+                    free, blocks = _bend_blocks(rng, c, width, free, (begin, begin + size))
+                    features += blocks
             continue
         if kind == "pillars":
             size, solids = _pillar_group(rng, c, width, max((hi - lo for lo, hi in free), default=0.0))
             if not solids:
                 continue
         elif kind == "block":  # a slalom too long for the room left keeps the blocks that fit
-            room = max((hi - lo for lo, hi in free), default=0.0)
-            if solids[-1][0] + solids[-1][2] > room:
-                while len(solids) > 1 and solids[-1][0] + solids[-1][2] > room:
-                    solids = solids[:-1]
-                value = min(width / 2 + abs(v) - hv for _, v, _, hv, _ in solids)  # the gaps the kept ones leave
+            solids, value = _fit_group(solids, value, width, max((hi - lo for lo, hi in free), default=0.0))
             size = solids[-1][0] + solids[-1][2]
         begin = _place(rng, free, size)
         if begin is None:
