@@ -94,7 +94,7 @@ class RslVecEnv(VecEnv):
         if dr_scale is not None:  # a randomisation ramp or curriculum: the first episodes at its scale too
             carry = {**(carry or {}), "dr_scale": jnp.asarray(np.broadcast_to(dr_scale, self.num_envs), jnp.float32)}
         if dr_step:  # a curriculum: each episode's outcome moves its environment's scale (legged.envs.api)
-            carry["dr_step"] = jnp.full(self.num_envs, dr_step, jnp.float32)
+            carry = {**(carry or {}), "dr_step": jnp.full(self.num_envs, dr_step, jnp.float32)}
         self.batch = vector.reset(jax.random.PRNGKey(seed), carry)
         self._obs = self.batch.state.obs
         self.episode_stats = EpisodeStats()

@@ -81,8 +81,8 @@ def _rebuild(source: dict, target: dict, mapping: np.ndarray, fresh_mean: torch.
     return out
 
 
-def source_layout(run_path: Path) -> tuple[dict, Path]:
-    """(observation layout, latest checkpoint) of a trained rsl run, without compiling its environment."""
+def source_layout(run_path: Path) -> tuple[dict, Path, str]:
+    """(observation layout, latest checkpoint, task) of a trained rsl run, without compiling its environment."""
     run = RunDir(Path(run_path))
     config = run.load_config()
     if config.backend != "rsl":
@@ -91,7 +91,7 @@ def source_layout(run_path: Path) -> tuple[dict, Path]:
     env = make(config.task, config.env)
     if not hasattr(env, "observation_layout"):
         raise RunDirError(f"cannot warm start from {run.path}: task {config.task} has no named observation layout")
-    return env.observation_layout(), run.latest_checkpoint()
+    return env.observation_layout(), run.latest_checkpoint(), config.task
 
 
 def same_task_start(alg, run_path: Path, task: str) -> str | None:
@@ -128,8 +128,7 @@ def warm_start(alg, run_path: Path, env, obs, task: str = "") -> str:
         return same
     if not hasattr(env, "observation_layout"):
         raise RunDirError(f"cannot warm start this task ({type(env).__name__}): it has no named observation layout")
-    layout, path = source_layout(run_path)
-    same_task = RunDir(Path(run_path)).load_config().task == task
+    layout, path, source_task = source_layout(run_path)
     saved = load_rsl_checkpoint(path)["alg"]
     target_layout = env.observation_layout()
     report = []
@@ -138,7 +137,7 @@ def warm_start(alg, run_path: Path, env, obs, task: str = "") -> str:
         x = obs[group].float()
         # the same task's inputs, all from the source: their statistics stay as settled as they were (restarting
         # the count lets the first iterations' observations, e.g. a curriculum's easiest level, pull them away)
-        keep = same_task and bool((mapping >= 0).all())
+        keep = source_task == task and bool((mapping >= 0).all())
         net.load_state_dict(_rebuild(saved[key], net.state_dict(), mapping, x.mean(0), x.std(0).clamp_min(1e-2),
                                      keep))
         report.append(f"{group}: {int((mapping >= 0).sum())} of {len(mapping)} inputs from the source")
