@@ -10,7 +10,7 @@ from pathlib import Path
 from legged.tasks import task_entry
 from policies.eval_report import EvalRequest, evaluation_report
 from policies.plots import line_plot
-from policies.run_dir import CHECKPOINT, RunDir
+from policies.run_dir import RunDir, checkpoint_step
 
 FIGURES = ("tracking_error_mps", "fall_rate", "episode_return", "success_rate")
 """Figures of an evaluation report a curve keeps (those the task reports)."""
@@ -45,7 +45,7 @@ def learning_curve(request: EvalRequest, every: int = 1) -> dict:
     times = saved_at(run)
     points = []
     for path in chosen:
-        step = int(CHECKPOINT.match(path.name).group(1))
+        step = checkpoint_step(path)
         if step not in times:
             raise ValueError(f"{path}: {run.metrics_path} has no record of step {step} (when was it saved?)")
         report = evaluation_report(dataclasses.replace(request, checkpoint=str(path)))

@@ -24,6 +24,11 @@ CHECKPOINT = re.compile(r"^step_(\d{12})\.(pt|npz|pkl)$")
 so that loading it can say how to convert it."""
 
 
+def checkpoint_step(path: Path) -> int:
+    """The environment step in a checkpoint's file name (step_000010002432.pt: 10002432)."""
+    return int(CHECKPOINT.match(Path(path).name).group(1))
+
+
 class RunDirError(ValueError):
     """The run directory cannot be used (unwritable, not a run, no checkpoint); the message says why."""
 
@@ -81,8 +86,12 @@ class RunDir:
             probe.unlink()
         except OSError as exc:
             raise RunDirError(f"run directory {self.path} is not writable: {exc.strerror}") from None
-        write_atomic(self.config_path, yaml.safe_dump(to_dict(config), sort_keys=False).encode())
+        self.save_config(config)
         return self
+
+    def save_config(self, config: TrainConfig) -> None:
+        """Write the run's resolved config (atomically)."""
+        write_atomic(self.config_path, yaml.safe_dump(to_dict(config), sort_keys=False).encode())
 
     def discard_unstarted(self) -> bool:
         """Remove a run that `create` made but that failed before its first checkpoint or metrics record (e.g.
@@ -155,7 +164,7 @@ class RunDir:
         if not self.checkpoint_dir.is_dir():
             return []
         found = [p for p in self.checkpoint_dir.iterdir() if CHECKPOINT.match(p.name)]
-        return sorted(found, key=lambda p: int(CHECKPOINT.match(p.name).group(1)))
+        return sorted(found, key=checkpoint_step)
 
     def latest_checkpoint(self) -> Path:
         """The newest checkpoint; RunDirError if there is none."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import jax
@@ -13,7 +14,7 @@ from policies.distributed import Launch, init_jax_processes
 from policies.environments import build_env  # looked up when a run starts: tests replace it with a small env
 from policies.recipes import task_config
 from policies.rsl_backend import train_rsl
-from policies.run_dir import RunDir
+from policies.run_dir import RunDir, checkpoint_step
 from policies.slim import refuse_slimmed
 from policies.soccer.hooks import SoccerHooks, SteeredHooks
 from policies.soccer.steered import steered_env
@@ -87,12 +88,23 @@ def start_run(task: str, run_dir: str | None, backend: str = "rsl", num_envs: in
         raise
 
 
-def resume_run(run_dir: str, progress: bool = True) -> dict:
-    """Continue a run from its last checkpoint with its own config, appending to its metrics."""
+def resume_run(run_dir: str, progress: bool = True, timesteps: int | None = None, threads: int = 0) -> dict:
+    """Continue a run from its last checkpoint with its own config, appending to its metrics. `timesteps`: a new
+    total for the run (past its last checkpoint; saved in its config); `threads`: this session's CPU threads."""
     run = RunDir(run_dir)
     config = run.load_config()
     refuse_pilot(config)
-    refuse_slimmed(run.latest_checkpoint(), config.task)  # fail now if there is nothing to resume from
+    latest = run.latest_checkpoint()
+    refuse_slimmed(latest, config.task)  # fail now if there is nothing to resume from
+    if timesteps is not None:
+        step = checkpoint_step(latest)
+        if timesteps <= step:
+            raise ConfigError(f"--timesteps {timesteps:,} is not past {run.path}'s last checkpoint (step {step:,}); "
+                              f"give the run's new total")
+        config = replace(config, timesteps=timesteps)
+        run.save_config(config)
+    if threads:
+        config = replace(config, threads=threads)
     run.clean_stale()
     _prepare(config)
     return _train(config, run, resume=True, progress=progress)

@@ -15,20 +15,26 @@ from legged.cli.nav import add_navigation_commands
 from legged.cli.runs import add_run_commands
 from legged.cli.soccer import add_soccer_commands
 
+DEFAULT_TIMESTEPS = 1_000_000  # `legged train`'s budget when --timesteps is not given
+
 
 def cmd_train(args) -> int:
     """`legged train`: start a run, or continue one with --resume."""
     from policies.training import resume_run, start_run
 
     if args.resume:
-        if args.task:
-            raise ValueError("--resume DIR continues a run with its own config; do not name a task")
-        record = resume_run(args.resume, progress=not args.quiet)
+        given = ["the task"] * bool(args.task) + [f"--{dest.replace('_', '-')}" for dest, default
+                                                  in args.fixed_by_resume.items() if getattr(args, dest) != default]
+        if given:
+            raise ValueError(f"--resume DIR continues a run with its own config (DIR/config.yaml): drop "
+                             f"{', '.join(given)}; only --timesteps (a new total) and --threads apply")
+        record = resume_run(args.resume, progress=not args.quiet, timesteps=args.timesteps, threads=args.threads)
     else:
         if not args.task:
             raise ValueError("name a task (see `legged tasks`) or continue a run with --resume DIR")
         record = start_run(args.task, args.run_dir, backend=args.backend, num_envs=args.num_envs,
-                           timesteps=args.timesteps, seed=args.seed, overrides=args.set, progress=not args.quiet,
+                           timesteps=args.timesteps or DEFAULT_TIMESTEPS, seed=args.seed, overrides=args.set,
+                           progress=not args.quiet,
                            physics=args.physics, threads=args.threads, init_from=args.init_from or "",
                            algo=args.algo)
     print(json.dumps(record))
@@ -175,8 +181,9 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--backend", choices=["rsl", "brax"], default="rsl")
     tr.add_argument("--num-envs", type=bounded(int, 1, 2**20), default=None,
                     help="parallel environments (default: the task's recipe, else 256)")
-    tr.add_argument("--timesteps", type=bounded(int, 1, 10**12), default=1_000_000,
-                    help="environment steps, all envs together")
+    tr.add_argument("--timesteps", type=bounded(int, 1, 10**12), default=None,
+                    help=f"environment steps, all envs together (default {DEFAULT_TIMESTEPS:,}; with --resume: a new "
+                         f"total, to train a finished run further)")
     tr.add_argument("--seed", type=SEED, default=0)
     add_physics_options(tr)
     tr.add_argument("--run-dir", default=None, help="where the run is written (default runs/<task>-<time>)")
@@ -190,7 +197,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="ppo; teacher (privileged encoder, for `legged distill`); hib, hib-no-ib, history "
                          "(one-stage students on the state history)")
     tr.add_argument("--quiet", action="store_true", help="no progress bar")
-    tr.set_defaults(fn=cmd_train)
+    fixed = ("backend", "num_envs", "seed", "physics", "run_dir", "set", "init_from", "algo")
+    tr.set_defaults(fn=cmd_train, fixed_by_resume={dest: tr.get_default(dest) for dest in fixed})
 
     ds = sub.add_parser("distill", help="distil a teacher into a deployable student: a privileged teacher (--algo "
                                         "teacher) into a history student, a state soccer player into a vision one")
