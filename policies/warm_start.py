@@ -26,8 +26,9 @@ ALIASES = {"command/dx": "command/vx", "command/dy": "command/vy", "command/dyaw
 """Inputs of the target task that read the weights of a differently named input of the source task."""
 
 ADAPT_SAMPLES = 1_000_000
-"""Normaliser sample count after a warm start from another task, or into a network with inputs the source lacks: its
-statistics then follow the new observations within the first few dozen iterations instead of staying the source's."""
+"""Normaliser sample count after a warm start from another task: its statistics then follow the new observations
+within the first few dozen iterations instead of staying the source's. From the same task the source's count stays
+(a new input's statistics start at the first batch's)."""
 
 
 def element_names(layout: list[tuple[str, int]]) -> list[str]:
@@ -135,9 +136,10 @@ def warm_start(alg, run_path: Path, env, obs, task: str = "") -> str:
     for net, group, key in ((alg.actor, "state", "actor_state_dict"), (alg.critic, "privileged_state", "critic_state_dict")):
         mapping = input_map(element_names(layout[group]), element_names(target_layout[group]))
         x = obs[group].float()
-        # the same task's inputs, all from the source: their statistics stay as settled as they were (restarting
-        # the count lets the first iterations' observations, e.g. a curriculum's easiest level, pull them away)
-        keep = source_task == task and bool((mapping >= 0).all())
+        # the same task: the source's statistics stay as settled as they were, the new inputs' start at this batch's
+        # (restarting the count let the first iterations' observations, e.g. a curriculum's easiest level, pull the
+        # settled ones away)
+        keep = source_task == task
         net.load_state_dict(_rebuild(saved[key], net.state_dict(), mapping, x.mean(0), x.std(0).clamp_min(1e-2),
                                      keep))
         report.append(f"{group}: {int((mapping >= 0).sum())} of {len(mapping)} inputs from the source")

@@ -126,8 +126,8 @@ def test_warm_start_from_the_same_task_copies_every_weight():
 def test_warm_start_of_the_same_task_with_randomisation_draws_keeps_the_policy():
     """go1-flat as it now trains (the randomisation's draws appended to the privileged state) from the walker trained
     without: the actor is copied whole, its normaliser's sample count too (a fine-tune's first observations must not
-    pull settled statistics away); the critic's old inputs keep their weights, the new ones start at zero and its
-    normaliser adapts."""
+    pull settled statistics away); the critic's old inputs keep their weights, the new ones start at zero weight with
+    the first batch's statistics, and its normaliser keeps the source's count too."""
     env = make("go1-flat")
     sizes = env.observation_dims()
     obs = dummy_observations(sizes, 8)
@@ -138,7 +138,14 @@ def test_warm_start_of_the_same_task_with_randomisation_draws_keeps_the_policy()
     payload = torch.load(sorted((WALKER / "checkpoints").glob("*.pt"))[-1], weights_only=True)["alg"]
     for name, value in new.actor.state_dict().items():
         assert torch.equal(value, payload["actor_state_dict"][name]), name
-    assert int(new.critic.state_dict()["obs_normalizer.count"]) == ADAPT_SAMPLES
+    critic = new.critic.state_dict()
+    assert int(critic["obs_normalizer.count"]) == int(payload["critic_state_dict"]["obs_normalizer.count"])
+    assert int(critic["obs_normalizer.count"]) != ADAPT_SAMPLES
+    batch = obs["privileged_state"][:, 74:].float()
+    torch.testing.assert_close(critic["obs_normalizer._mean"][0, 74:], batch.mean(0))
+    torch.testing.assert_close(critic["obs_normalizer._std"][0, 74:], batch.std(0).clamp_min(1e-2))
+    settled = payload["critic_state_dict"]["obs_normalizer._mean"]
+    torch.testing.assert_close(critic["obs_normalizer._mean"][:, :74], settled)
     first = new.critic.state_dict()["mlp.0.weight"]
     assert torch.equal(first[:, :74], payload["critic_state_dict"]["mlp.0.weight"])
     assert torch.count_nonzero(first[:, 74:]) == 0

@@ -1,5 +1,6 @@
 """The confined tasks' speed limit: exploration pays no speed beyond it, `overspeed` charges for the excess, a
-planned path may lower it at its waypoints, and a policy trained with `speed_command` is told the limit in force.
+planned path may lower it at its waypoints, and a policy trained with `speed_command` is told the limit in force (and,
+with `preview`, the waypoint after the current one).
 Runs saved before the limit existed load with their old observations. A robot that stands still too long ends its
 training episode (`stall_timeout_s`), never an evaluation's, and navigation runs the robot model as it is when asked.
 
@@ -88,6 +89,21 @@ def test_a_waypoint_limit_lowers_the_limit_in_force_and_the_command_tells_it(ter
     assert off.command_names == ("dx", "dy", "dz", "roll", "pitch", "dyaw")
     assert off._command(view, info).shape == (6,)
     assert env.observation_size["state"][0] == off.observation_size["state"][0] + 1
+
+
+def test_the_command_can_preview_the_waypoint_after_the_current_one(terrain):
+    env = _env(terrain, six_dof_command=True, speed_command=True, preview=True)
+    assert env.command_names == ("dx", "dy", "dz", "roll", "pitch", "dyaw", "next_dx", "next_dy", "speed_limit")
+    view, info = _moving(env, 0.5)
+    cmd, base, path = np.asarray(env._command(view, info)), np.asarray(view.xpos[env._trunk]), np.asarray(info["path"])
+    # both in the yaw frame: the distances to the current and the next waypoint, and the step between them, hold
+    assert np.linalg.norm(cmd[0:2]) == pytest.approx(np.linalg.norm(path[1, :2] - base[:2]), rel=1e-5)
+    assert np.linalg.norm(cmd[6:8]) == pytest.approx(np.linalg.norm(path[2, :2] - base[:2]), rel=1e-5)
+    assert np.linalg.norm(cmd[6:8] - cmd[0:2]) == pytest.approx(np.linalg.norm(path[2, :2] - path[1, :2]), rel=1e-5)
+    at_goal = np.asarray(env._command(view, dict(info, waypoint=info["path_len"] - 1)))
+    np.testing.assert_allclose(at_goal[6:8], at_goal[0:2])  # nothing after the goal: the preview is the goal
+    assert ("command/next_dx", 1) in env.observation_layout()["state"]
+    assert _env(terrain, mode="goal", preview=True).command_names == ("dx", "dy")  # goal mode has no waypoints
 
 
 def test_velocity_commands_respect_the_limit(terrain):

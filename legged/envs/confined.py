@@ -108,6 +108,10 @@ class ConfinedConfig(EnvConfig):
     sees many limits; None: every episode's limit is `max_speed`."""
     six_dof_command: bool = False
     """Waypoints mode: add target height, roll, pitch and relative yaw to the 2-D command."""
+    preview: bool = False
+    """Waypoints mode: the command also holds the waypoint after the current one (its dx, dy in the yaw frame; the
+    goal's own at the goal), so that a turn shows before the robot reaches it. Off for runs saved before it
+    existed."""
     spawn_yaw: float = 0.3
     """Initial heading is uniform in +-this, radians."""
     curriculum: bool = True
@@ -177,6 +181,7 @@ class ConfinedEnv(LeggedEnv):
         if mode in ("waypoints", "goal"):
             six = mode == "waypoints" and self.config.six_dof_command
             names = ("dx", "dy") + (("dz", "roll", "pitch", "dyaw") if six else ())
+            names += ("next_dx", "next_dy") if mode == "waypoints" and self.config.preview else ()
         else:
             names = ("vx", "vy", "yaw_rate") + (("height", "roll", "pitch") if mode == "skills" else ())
         return names + (("speed_limit",) if self.config.speed_command else ())
@@ -258,8 +263,11 @@ class ConfinedEnv(LeggedEnv):
         rel = yaw_rotate(yaw, target[:2] - base[:2])
         if mode in ("waypoints", "goal"):
             if mode == "waypoints" and self.config.six_dof_command:
-                return jnp.concatenate([rel, jnp.stack([target[2] - base[2], target[3], target[4],
-                                                        wrap_angle(target[5] - yaw)])])
+                rel = jnp.concatenate([rel, jnp.stack([target[2] - base[2], target[3], target[4],
+                                                       wrap_angle(target[5] - yaw)])])
+            if mode == "waypoints" and self.config.preview:
+                after = info["path"][jnp.minimum(info["waypoint"] + 1, info["path_len"] - 1)]
+                rel = jnp.concatenate([rel, yaw_rotate(yaw, after[:2] - base[:2])])
             return rel
         cmd = self._velocity_command(data, info)
         if mode == "skills":
