@@ -56,8 +56,8 @@ def input_map(source: list[str], target: list[str]) -> np.ndarray:
 def _rebuild(source: dict, target: dict, mapping: np.ndarray, fresh_mean: torch.Tensor,
              fresh_std: torch.Tensor, keep_count: bool = False) -> dict:
     """Target network state: first layer and normaliser rebuilt through `mapping`, the rest copied. The
-    normaliser's sample count restarts at ADAPT_SAMPLES unless `keep_count` (its statistics already describe these
-    observations)."""
+    normaliser's sample count restarts at ADAPT_SAMPLES unless `keep_count` (the same task: the source's statistics stay
+    settled; inputs it lacks take `fresh_mean` and `fresh_std`)."""
     out = dict(target)
     known = torch.as_tensor(mapping >= 0)
     src_idx = torch.as_tensor(np.maximum(mapping, 0))
