@@ -1,7 +1,7 @@
 """Warm start: begin a PPO run from the networks of a trained run of another task (e.g. the confined
-follower from the go1-flat walker), or of the same task (its networks as they are, e.g. to go on with new
-rewards; through the layouts when its observations grew, e.g. by the randomisation's draws in the privileged
-state).
+follower from the go1-flat walker), or of the same task (a fine-tune: its networks as they are, e.g. to go on with
+new rewards, through the layouts when its observations grew, e.g. by the randomisation's draws in the privileged
+state; its optimiser and curriculum levels too, so that it goes on as a resumed run would).
 
 The two tasks' observations differ, so the first layer is rebuilt input by input from the observations'
 named layouts (`LeggedEnv.observation_layout`): an input both tasks have keeps its weights and its
@@ -28,7 +28,17 @@ ALIASES = {"command/dx": "command/vx", "command/dy": "command/vy", "command/dyaw
 ADAPT_SAMPLES = 1_000_000
 """Normaliser sample count after a warm start from another task: its statistics then follow the new observations
 within the first few dozen iterations instead of staying the source's. From the same task the source's count stays
-(a new input's statistics start at the first batch's)."""
+(a new input's statistics are measured over a rollout, WARM_UP_STEPS)."""
+
+OPTIMISER_NOTE = {True: "its optimiser's moments and learning rate",
+                  False: "a new optimiser (the source's is missing or does not fit)"}
+"""How the note of a warm start from the same task names the optimiser it starts with."""
+
+WARM_UP_STEPS = 100
+"""Steps of every environment that a warm start from the same task rolls out, its policy acting, to measure the
+statistics of inputs the source did not have. The normaliser keeps the source's sample count (tens of millions), so
+those statistics are never revised in training: taken from the first batch (every episode at its start) they were a
+hundred times too narrow for the rest of an episode (a waypoint preview's std 0.035 m), and the fine-tune fell."""
 
 
 def element_names(layout: list[tuple[str, int]]) -> list[str]:
@@ -82,6 +92,45 @@ def _rebuild(source: dict, target: dict, mapping: np.ndarray, fresh_mean: torch.
     return out
 
 
+def continue_optimiser(alg, saved: dict, columns: dict | None = None) -> bool:
+    """Load the source's optimiser state (`saved`: its checkpoint's "alg") into `alg`'s, so that a fine-tune of the same
+    task updates as a resumed run would: Adam's moments, and with the adaptive schedule the learning rate it had
+    reached (a fixed schedule keeps this run's). `columns` maps a first-layer weight (by id) rebuilt by layout to its
+    source column per column (-1: a new input, whose moments start at zero). A new optimiser's first update, at the
+    configured rate (1e-3 against the 5e-5 the source had settled at), threw a trained follower off: training falls
+    went from 20% to 50%. False, the optimiser left new, when the source has none (a slimmed run) or it does not
+    fit."""
+    source = saved.get("optimizer_state_dict")
+    params = [p for group in alg.optimizer.param_groups for p in group["params"]]
+    if source is None or [len(g["params"]) for g in source["param_groups"]] != [
+            len(g["params"]) for g in alg.optimizer.param_groups]:
+        return False
+    columns = columns or {}
+    state = {"param_groups": source["param_groups"], "state": {}}
+    for i, entry in source["state"].items():
+        entry, mapping = dict(entry), columns.get(id(params[i]))
+        for key in ("exp_avg", "exp_avg_sq"):
+            if mapping is not None and key in entry:
+                known, src = torch.as_tensor(mapping >= 0), torch.as_tensor(np.maximum(mapping, 0))
+                entry[key] = torch.where(known[None, :], entry[key][:, src], torch.zeros(()))
+            if key in entry and entry[key].shape != params[i].shape:
+                return False
+        state["state"][i] = entry
+    rate = alg.learning_rate
+    alg.optimizer.load_state_dict(state)
+    if getattr(alg, "schedule", None) == "adaptive":
+        alg.learning_rate = alg.optimizer.param_groups[0]["lr"]
+    else:
+        for group in alg.optimizer.param_groups:
+            group["lr"] = rate
+    return True
+
+
+def _first_weight(net) -> torch.nn.Parameter:
+    """A network's first-layer weight (the one a warm start rebuilds by layout)."""
+    return dict(net.named_parameters())["mlp.0.weight"]
+
+
 def source_layout(run_path: Path) -> tuple[dict, Path, str]:
     """(observation layout, latest checkpoint, task) of a trained rsl run, without compiling its environment."""
     run = RunDir(Path(run_path))
@@ -93,6 +142,19 @@ def source_layout(run_path: Path) -> tuple[dict, Path, str]:
     if not hasattr(env, "observation_layout"):
         raise RunDirError(f"cannot warm start from {run.path}: task {config.task} has no named observation layout")
     return env.observation_layout(), run.latest_checkpoint(), config.task
+
+
+def source_levels(run_path: Path, task: str, num_envs: int) -> torch.Tensor | None:
+    """The curriculum level of each of `num_envs` environments for a warm start of `task` from `run_path`: its latest
+    checkpoint's levels (repeated or cut to `num_envs`) if it trained the same task with a curriculum, else None. A
+    fine-tune then goes on where its source stood instead of relearning the easiest levels (whose worlds its critic
+    had stopped valuing: restarted at level 0, a 21M-step follower fell in 70% of its training episodes)."""
+    run = RunDir(Path(run_path))
+    config = run.load_config()
+    if config.task != task or config.backend != "rsl":  # another task's, or not one warm_start reads
+        return None
+    levels = load_rsl_checkpoint(run.latest_checkpoint()).get("curriculum_levels")
+    return None if levels is None else torch.as_tensor(np.resize(levels.numpy(), num_envs))
 
 
 def same_task_start(alg, run_path: Path, task: str) -> str | None:
@@ -117,13 +179,44 @@ def same_task_start(alg, run_path: Path, task: str) -> str | None:
             raise RunDirError(f"cannot warm start from {path}: its {key.split('_')[0]} does not fit this run's "
                               f"(use the source run's ppo.actor_hidden, ppo.critic_hidden and observations): "
                               f"{str(e).splitlines()[0]}") from None
-    return f"warm start from {path}: the same task, every weight and normaliser statistic as they were"
+    optimiser = OPTIMISER_NOTE[continue_optimiser(alg, saved)]
+    return f"warm start from {path}: the same task, every weight and normaliser statistic as they were; {optimiser}"
 
 
-def warm_start(alg, run_path: Path, env, obs, task: str = "") -> str:
+def rollout_statistics(venv, actor, hooks, steps: int = WARM_UP_STEPS) -> dict:
+    """{group: (mean, std)} of each observation group over `steps` steps of every environment of `venv` (an rsl-rl
+    vector environment), `actor` acting with sampled actions as in training, `hooks` (policies.training_hooks)
+    called as in a rollout. Nothing is learned, no normaliser moves, the episodes that end are not reported."""
+    obs = venv.get_observations()
+    sums = {k: [torch.zeros(obs[k].shape[1:], dtype=torch.float64) for _ in range(2)] for k in obs.keys()}
+    count = 0
+    hooks.before_rollout(venv)
+    with torch.inference_mode():
+        for step in range(steps + 1):
+            for k, (total, squares) in sums.items():
+                x = obs[k].double()
+                total += x.sum(0)
+                squares += (x * x).sum(0)
+            count += obs[next(iter(sums))].shape[0]
+            if step < steps:
+                obs, _, dones, _ = venv.step(actor(obs, stochastic_output=True))
+                actor.reset(dones)  # a recurrent actor forgets the episodes that ended (as in training)
+                hooks.after_step(dones)
+    venv.episode_stats.means()  # the warm-up's episodes are not the first iteration's
+    out = {}
+    for k, (total, squares) in sums.items():
+        mean = total / count
+        var = (squares / count - mean * mean).clamp_min(0.0) * count / max(count - 1, 1)
+        out[k] = (mean.float(), var.sqrt().float())
+    return out
+
+
+def warm_start(alg, run_path: Path, env, obs, task: str = "", observe=None) -> str:
     """Load `run_path`'s latest actor and critic into `alg` (rsl-rl PPO of `env`, training `task`): as they are
     if the source trained the same task, else through the observation layouts; `obs` is a first batch of
-    observations (statistics of the new inputs). Returns a summary."""
+    observations (statistics of the new inputs). `observe(alg)`, when given, returns {group: (mean, std)} over a
+    rollout of the warm-started policy (rollout_statistics): a warm start from the same task takes its new inputs'
+    statistics from it. Returns a summary."""
     same = same_task_start(alg, run_path, task)
     if same is not None:
         return same
@@ -132,15 +225,23 @@ def warm_start(alg, run_path: Path, env, obs, task: str = "") -> str:
     layout, path, source_task = source_layout(run_path)
     saved = load_rsl_checkpoint(path)["alg"]
     target_layout = env.observation_layout()
-    report = []
-    for net, group, key in ((alg.actor, "state", "actor_state_dict"), (alg.critic, "privileged_state", "critic_state_dict")):
-        mapping = input_map(element_names(layout[group]), element_names(target_layout[group]))
-        x = obs[group].float()
-        # the same task: the source's statistics stay as settled as they were, the new inputs' start at this batch's
-        # (restarting the count let the first iterations' observations, e.g. a curriculum's easiest level, pull the
-        # settled ones away)
-        keep = source_task == task
-        net.load_state_dict(_rebuild(saved[key], net.state_dict(), mapping, x.mean(0), x.std(0).clamp_min(1e-2),
-                                     keep))
-        report.append(f"{group}: {int((mapping >= 0).sum())} of {len(mapping)} inputs from the source")
+    nets = ((alg.actor, "state", "actor_state_dict"), (alg.critic, "privileged_state", "critic_state_dict"))
+    maps = {group: input_map(element_names(layout[group]), element_names(target_layout[group])) for _, group, _ in nets}
+    # the same task: the source's statistics stay as settled as they were (restarting the count let the first
+    # iterations' observations, e.g. a curriculum's easiest level, pull the settled ones away)
+    keep = source_task == task
+
+    def load(stats: dict) -> None:
+        for net, group, key in nets:
+            mean, std = stats[group]
+            net.load_state_dict(_rebuild(saved[key], net.state_dict(), maps[group], mean, std.clamp_min(1e-2), keep))
+
+    load({group: (obs[group].float().mean(0), obs[group].float().std(0)) for group in maps})
+    report = [f"{group}: {int((m >= 0).sum())} of {len(m)} inputs from the source" for group, m in maps.items()]
+    if keep and observe is not None and any((m < 0).any() for m in maps.values()):
+        load(observe(alg))  # the new inputs have zero weights: the rollout is the source policy's
+        report.append("the new inputs' statistics measured over a rollout")
+    if keep:  # another task's optimiser state means nothing here
+        columns = {id(_first_weight(net)): maps[group] for net, group, _ in nets}
+        report.append(OPTIMISER_NOTE[continue_optimiser(alg, saved, columns)])
     return f"warm start from {path}: " + "; ".join(report)

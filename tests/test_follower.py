@@ -1,6 +1,7 @@
 """What the confined follower is trained and judged with: the difficulty curriculum (carried from episode
 to episode), the warm start from the go1-flat walker, and the fixed held-out evaluation."""
 
+import dataclasses
 from pathlib import Path
 
 import jax
@@ -17,7 +18,7 @@ from policies.config import PPOConfig
 from policies.evaluate import confined_eval_config, one_tile_each, wilson_interval
 from policies.rsl_backend import build_ppo, dummy_observations
 from policies.warm_start import ADAPT_SAMPLES, element_names, input_map, warm_start
-from tests.warm_support import saved_actor, warm_started
+from tests.warm_support import random_observations, saved_actor, warm_started
 
 WALKER = Path(__file__).resolve().parents[1] / "assets" / "policies" / "go1-flat-walker-v1"
 
@@ -149,6 +150,129 @@ def test_warm_start_of_the_same_task_with_randomisation_draws_keeps_the_policy()
     first = new.critic.state_dict()["mlp.0.weight"]
     assert torch.equal(first[:, :74], payload["critic_state_dict"]["mlp.0.weight"])
     assert torch.count_nonzero(first[:, 74:]) == 0
+
+
+def test_a_same_task_warm_start_measures_its_new_inputs_over_a_rollout():
+    """With `observe` (a rollout of the warm-started policy), the new inputs take the rollout's statistics, not the
+    first batch's (the kept sample count never revises them); the old ones and every weight stay as saved."""
+    env = make("go1-flat")
+    obs = dummy_observations(env.observation_dims(), 8)
+    new = build_ppo(obs, 8, 12, PPOConfig(actor_hidden=(128, 128, 128), critic_hidden=(128, 128, 128)), "cpu")
+    n = env.observation_dims()["privileged_state"]
+    rolled = {"state": (torch.zeros(42), torch.ones(42)),
+              "privileged_state": (torch.linspace(-1.0, 1.0, n), torch.linspace(0.001, 2.0, n))}
+    calls = []
+    note = warm_start(new, WALKER, env, obs, "go1-flat", observe=lambda alg: calls.append(alg) or rolled)
+    assert calls == [new] and "measured over a rollout" in note, note
+    payload = torch.load(sorted((WALKER / "checkpoints").glob("*.pt"))[-1], weights_only=True)["alg"]
+    payload, critic = payload["critic_state_dict"], new.critic.state_dict()
+    mean, std = rolled["privileged_state"]
+    torch.testing.assert_close(critic["obs_normalizer._mean"][0, 74:], mean[74:])
+    torch.testing.assert_close(critic["obs_normalizer._std"][0, 74:], std[74:].clamp_min(1e-2))
+    torch.testing.assert_close(critic["obs_normalizer._mean"][:, :74], payload["obs_normalizer._mean"])
+    assert torch.equal(critic["mlp.0.weight"][:, :74], payload["mlp.0.weight"])
+    assert torch.count_nonzero(critic["mlp.0.weight"][:, 74:]) == 0
+
+
+def test_rollout_statistics_are_those_of_every_observation_the_rollout_saw():
+    """The mean and std over the first observations and those of each step; actions sampled as in training; the hooks
+    called as in a rollout; the warm-up's finished episodes not left for the first iteration's record."""
+    from policies.rsl_vecenv import EpisodeStats
+    from policies.warm_start import rollout_statistics
+
+    gen = torch.Generator().manual_seed(0)
+    batches = [torch.randn(4, 3, generator=gen) * (k + 1) for k in range(6)]
+
+    class Venv:
+        episode_stats = EpisodeStats()
+        seen = 0
+
+        def get_observations(self):
+            return {"state": batches[0]}
+
+        def step(self, actions):
+            assert actions.shape == (4, 2)
+            self.seen += 1
+            self.episode_stats.count += 1
+            return {"state": batches[self.seen]}, None, torch.zeros(4, dtype=torch.bool), {}
+
+    class Hooks:
+        calls = []
+
+        def before_rollout(self, venv):
+            self.calls.append("before")
+
+        def after_step(self, dones):
+            self.calls.append("step")
+
+    class Actor:
+        modes, resets = [], 0
+
+        def __call__(self, obs, stochastic_output):
+            self.modes.append(stochastic_output)
+            return torch.zeros(4, 2)
+
+        def reset(self, dones):
+            self.resets += 1
+
+    venv, hooks, actor = Venv(), Hooks(), Actor()
+    stats = rollout_statistics(venv, actor, hooks, steps=5)
+    every = torch.cat(batches)
+    torch.testing.assert_close(stats["state"][0], every.mean(0))
+    torch.testing.assert_close(stats["state"][1], every.std(0))
+    assert actor.modes == [True] * 5 and actor.resets == 5 and hooks.calls == ["before"] + ["step"] * 5
+    assert venv.episode_stats.count == 0
+
+
+def test_a_fine_tune_of_the_same_task_goes_on_at_its_sources_curriculum_levels(tmp_path):
+    """source_levels: the source's last checkpoint's levels, repeated or cut to the new run's environments, when it
+    trained the same task; None for another task or a checkpoint without levels."""
+    import shutil
+
+    from policies.warm_start import source_levels
+
+    run = tmp_path / "run"
+    shutil.copytree(WALKER, run)
+    assert source_levels(run, "go1-flat", 4) is None  # the walker has no curriculum
+    last = sorted((run / "checkpoints").glob("*.pt"))[-1]
+    payload = torch.load(last, weights_only=True)
+    payload["curriculum_levels"] = torch.tensor([3, 1, 4], dtype=torch.int32)
+    torch.save(payload, last)
+    assert source_levels(run, "go1-flat", 5).tolist() == [3, 1, 4, 3, 1]
+    assert source_levels(run, "go1-flat", 2).tolist() == [3, 1]
+    assert source_levels(run, "go1-rough", 5) is None
+
+
+def test_a_same_task_warm_start_goes_on_with_its_sources_optimiser():
+    """Adam's moments as the source left them (a first layer rebuilt by layout column by column, a new input's at
+    zero) and, with the adaptive schedule, the learning rate it had reached; a fixed schedule keeps this run's rate;
+    no optimiser in the source (a slimmed run) or one of other shapes leaves the new one."""
+    from policies.warm_start import continue_optimiser
+
+    ppo = PPOConfig(actor_hidden=(16, 16), critic_hidden=(16, 16))
+    src_obs = random_observations({"state": 5, "privileged_state": 6}, 8, 0)
+    source = build_ppo(src_obs, 8, 3, ppo, "cpu")
+    (source.actor(src_obs).square().sum() + source.critic(src_obs).square().sum()).backward()
+    source.optimizer.step()  # every moment a weight's own
+    for group in source.optimizer.param_groups:
+        group["lr"] = 5e-5
+    saved = {"optimizer_state_dict": source.optimizer.state_dict()}
+    first = lambda alg: dict(alg.actor.named_parameters())["mlp.0.weight"]
+    mapping = np.array([0, 1, -1, 2, 3, -1, 4])  # two inputs added to the actor's five
+    new_obs = random_observations({"state": 7, "privileged_state": 6}, 8, 1)
+
+    target = build_ppo(new_obs, 8, 3, ppo, "cpu")
+    assert continue_optimiser(target, saved, {id(first(target)): mapping}) and target.learning_rate == 5e-5
+    moment, source_moment = (a.optimizer.state[first(a)]["exp_avg"] for a in (target, source))
+    assert torch.equal(moment[:, [0, 1, 3, 4, 6]], source_moment) and torch.count_nonzero(moment[:, [2, 5]]) == 0
+    last = [list(alg.critic.parameters())[-1] for alg in (target, source)]
+    assert torch.equal(target.optimizer.state[last[0]]["exp_avg_sq"], source.optimizer.state[last[1]]["exp_avg_sq"])
+
+    fixed = build_ppo(new_obs, 8, 3, dataclasses.replace(ppo, schedule="fixed", learning_rate=3e-4), "cpu")
+    assert continue_optimiser(fixed, saved, {id(first(fixed)): mapping})
+    assert fixed.optimizer.param_groups[0]["lr"] == 3e-4
+    assert not continue_optimiser(build_ppo(new_obs, 8, 3, ppo, "cpu"), {}, {})
+    assert not continue_optimiser(build_ppo(src_obs, 8, 3, dataclasses.replace(ppo, actor_hidden=(8, 8)), "cpu"), saved)
 
 
 def test_warm_start_into_a_state_with_past_steps_acts_as_the_walker():

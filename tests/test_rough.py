@@ -136,3 +136,31 @@ def test_held_out_and_ood_configs():
     assert ood.push_velocity == pytest.approx(1.5 * config.randomization.push_velocity)
     with pytest.raises(ValueError, match="randomisation"):
         ood_config(object())
+
+
+def test_a_fine_tune_of_the_same_task_goes_on_at_its_sources_levels(tmp_path, capsys):
+    """`legged train go1-rough --init-from` a go1-rough run: every environment starts at the level the source's last
+    checkpoint holds (edited here, so that dropping them would show), and the optimiser is the source's."""
+    import torch
+
+    from legged.cli import main
+    from policies.checkpoints import load_rsl_checkpoint
+    from policies.run_dir import RunDir
+
+    common = ["--physics", "native", "--threads", "1", "--num-envs", "8", "--timesteps", "40",
+              "--set", "ppo.num_steps_per_env=5", "--set", "ppo.num_mini_batches=2", "--set", "checkpoint_every=1",
+              "--set", "ppo.actor_hidden=[32, 32]", "--set", "ppo.critic_hidden=[32, 32]",
+              "--set", "env.terrain.levels=2", "--set", "env.terrain.tile_size=2.0", "--set", "env.terrain.border=1.0"]
+    source, tuned = tmp_path / "source", tmp_path / "tuned"
+    assert main(["train", "go1-rough", *common, "--run-dir", str(source)]) == 0
+    last = RunDir(source).latest_checkpoint()
+    payload = load_rsl_checkpoint(last)
+    payload["curriculum_levels"] = torch.tensor([0, 1, 1, 0, 1, 1, 0, 1], dtype=torch.int32)
+    torch.save(payload, last)
+    capsys.readouterr()
+    assert main(["train", "go1-rough", *common, "--run-dir", str(tuned), "--init-from", str(source)]) == 0
+    out = capsys.readouterr().out
+    assert "curriculum: from the levels of" in out and "its optimiser's moments and learning rate" in out, out
+    # 5 steps of 20 s episodes end none, so each environment is still at the level it started at
+    levels = load_rsl_checkpoint(RunDir(tuned).latest_checkpoint())["curriculum_levels"]
+    assert levels.tolist() == [0, 1, 1, 0, 1, 1, 0, 1]

@@ -192,7 +192,8 @@ def build_parser() -> argparse.ArgumentParser:
                          "checkpoint_every=5, device=cuda (repeatable; see config.yaml of a run for all fields)")
     tr.add_argument("--resume", default=None, metavar="DIR", help="continue the run in DIR from its last checkpoint")
     tr.add_argument("--init-from", default=None, metavar="RUN",
-                    help="warm start from RUN's networks (rsl; e.g. the go1-flat walker for a confined follower)")
+                    help="warm start from RUN's networks (rsl; e.g. the go1-flat walker for a confined follower); from a "
+                         "run of the same task, also its optimiser and curriculum levels (a fine-tune)")
     tr.add_argument("--algo", choices=["ppo", "teacher", "hib", "hib-no-ib", "history"], default="ppo",
                     help="ppo; teacher (privileged encoder, for `legged distill`); hib, hib-no-ib, history "
                          "(one-stage students on the state history)")
