@@ -37,8 +37,9 @@ OPTIMISER_NOTE = {True: "its optimiser's moments and learning rate",
 WARM_UP_STEPS = 100
 """Steps of every environment that a warm start from the same task rolls out, its policy acting, to measure the
 statistics of inputs the source did not have. The normaliser keeps the source's sample count (tens of millions), so
-those statistics are never revised in training: taken from the first batch (every episode at its start) they were a
-hundred times too narrow for the rest of an episode (a waypoint preview's std 0.035 m), and the fine-tune fell."""
+those statistics are never revised in training: taken from the first batch (every episode at its start) they were
+five times too narrow for the rest of an episode (a waypoint preview's std 0.035 m against 0.17 m over a rollout),
+and the fine-tune fell."""
 
 
 def element_names(layout: list[tuple[str, int]]) -> list[str]:
@@ -98,7 +99,7 @@ def continue_optimiser(alg, saved: dict, columns: dict | None = None) -> bool:
     reached (a fixed schedule keeps this run's). `columns` maps a first-layer weight (by id) rebuilt by layout to its
     source column per column (-1: a new input, whose moments start at zero). A new optimiser's first update, at the
     configured rate (1e-3 against the 5e-5 the source had settled at), threw a trained follower off: training falls
-    went from 20% to 50%. False, the optimiser left new, when the source has none (a slimmed run) or it does not
+    went from 20% to 50-75%. False, the optimiser left new, when the source has none (a slimmed run) or it does not
     fit."""
     source = saved.get("optimizer_state_dict")
     params = [p for group in alg.optimizer.param_groups for p in group["params"]]
@@ -147,8 +148,9 @@ def source_layout(run_path: Path) -> tuple[dict, Path, str]:
 def source_levels(run_path: Path, task: str, num_envs: int) -> torch.Tensor | None:
     """The curriculum level of each of `num_envs` environments for a warm start of `task` from `run_path`: its latest
     checkpoint's levels (repeated or cut to `num_envs`) if it trained the same task with a curriculum, else None. A
-    fine-tune then goes on where its source stood instead of relearning the easiest levels (whose worlds its critic
-    had stopped valuing: restarted at level 0, a 21M-step follower fell in 70% of its training episodes)."""
+    fine-tune then goes on where its source stood instead of relearning the easiest levels, whose worlds its critic
+    had stopped valuing (restarted at level 0 with a new optimiser, a 21M-step follower fell in 50-75% of its
+    training episodes)."""
     run = RunDir(Path(run_path))
     config = run.load_config()
     if config.task != task or config.backend != "rsl":  # another task's, or not one warm_start reads
