@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import time
-from pathlib import Path
 
 import jax
 import numpy as np
@@ -34,7 +33,7 @@ from policies.rsl_vecenv import RslVecEnv
 from policies.run_dir import RunDir, TrainingDiverged, check_compatible
 from policies.students import load_teacher, start_student
 from policies.training_hooks import TrainingHooks
-from policies.warm_start import rollout_statistics, source_levels, warm_start
+from policies.warm_start import SourceRun, rollout_statistics, source_levels, warm_start
 
 
 def _saved_rows(payload: dict | None, key: str, launch, num_envs: int):
@@ -74,8 +73,9 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
     key = jax.random.fold_in(jax.random.fold_in(jax.random.PRNGKey(config.seed), iteration), launch.rank)
     hib = config.algo in ("hib", "hib-no-ib")
     levels = _saved_rows(payload, "curriculum_levels", launch, config.num_envs)
-    if payload is None and config.init_from:  # a fine-tune of the same task goes on at its source's levels
-        levels = _saved_rows({"curriculum_levels": source_levels(Path(config.init_from), config.task, config.num_envs)},
+    source = SourceRun(config.init_from) if payload is None and config.init_from else None  # a warm start's
+    if source is not None:  # a fine-tune of the same task goes on at its source's levels
+        levels = _saved_rows({"curriculum_levels": source_levels(source, config.task, config.num_envs)},
                              "curriculum_levels", launch, config.num_envs)
         if levels is not None and progress and launch.is_main:
             print(f"curriculum: from the levels of {config.init_from} (mean {levels.mean():.2f})")
@@ -93,7 +93,7 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
         generator = torch.Generator().manual_seed(config.seed + launch.rank + 7919 * iteration)
         venv.episode_length_buf = torch.randint(0, env.config.episode_steps, (local_envs,), generator=generator)
     hooks.start(venv, payload, iteration, launch.rank)
-    alg = start_algorithm(env, config, venv, payload, iteration, launch, device, progress, hooks)
+    alg = start_algorithm(env, config, venv, payload, iteration, launch, device, progress, hooks, source)
     if launch.distributed:
         alg.broadcast_parameters()  # every process starts from rank 0's networks
     writer = SummaryWriter(str(run.path / "tb")) if launch.is_main else None
@@ -199,10 +199,10 @@ def train_rsl(env, config: TrainConfig, run: RunDir, resume: bool = False, progr
 
 
 def start_algorithm(env, config: TrainConfig, venv, payload: dict | None, iteration: int, launch: Launch,
-                    device: str, progress: bool, hooks: TrainingHooks):
+                    device: str, progress: bool, hooks: TrainingHooks, source: SourceRun | None = None):
     """The run's rsl-rl algorithm (PPO or a distillation) with its networks: a resumed checkpoint's (`payload`),
-    a teacher-pulled student's, a warm start's (config.init_from; it may roll the environments out, through
-    `hooks`, to measure inputs the source run did not have), or new ones."""
+    a teacher-pulled student's, a warm start's (`source`, config.init_from's run read once; it may roll the
+    environments out, through `hooks`, to measure inputs the source run did not have), or new ones."""
     teacher = load_teacher(config, env) if config.algo in DISTILL_ALGOS else None
     alg = build_algorithm(config, venv.get_observations(), venv.num_envs, env.action_size, device, launch,
                           teacher=None if teacher is None else teacher[0])
@@ -222,7 +222,7 @@ def start_algorithm(env, config: TrainConfig, venv, payload: dict | None, iterat
     elif teacher is not None:  # kl: a fresh student (or distill.student_init's), pulled towards its teacher
         start_student(alg, config, *teacher)
     elif config.init_from:
-        note = warm_start(alg, Path(config.init_from), env, venv.get_observations(), config.task,
+        note = warm_start(alg, source or SourceRun(config.init_from), env, venv.get_observations(), config.task,
                           observe=lambda warmed: rollout_statistics(venv, warmed.actor, hooks))
         if progress and launch.is_main:
             print(note)

@@ -13,6 +13,7 @@ are copied as they are, which needs the same hidden sizes.
 
 from __future__ import annotations
 
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -132,43 +133,61 @@ def _first_weight(net) -> torch.nn.Parameter:
     return dict(net.named_parameters())["mlp.0.weight"]
 
 
-def source_layout(run_path: Path) -> tuple[dict, Path, str]:
-    """(observation layout, latest checkpoint, task) of a trained rsl run, without compiling its environment."""
-    run = RunDir(Path(run_path))
-    config = run.load_config()
-    if config.backend != "rsl":
-        raise RunDirError(f"cannot warm start from {run.path}: it was trained with the {config.backend} backend "
-                          "(warm starts read rsl-rl checkpoints)")
-    env = make(config.task, config.env)
-    if not hasattr(env, "observation_layout"):
-        raise RunDirError(f"cannot warm start from {run.path}: task {config.task} has no named observation layout")
-    return env.observation_layout(), run.latest_checkpoint(), config.task
+class SourceRun:
+    """The trained run a warm start reads: its config and latest checkpoint, each read once however many parts of
+    the start (levels, networks, optimiser) need them."""
+
+    def __init__(self, path: Path | str):
+        self.run = RunDir(Path(path))
+        self.config = self.run.load_config()
+        self.checkpoint = self.run.latest_checkpoint()
+
+    @cached_property
+    def payload(self) -> dict:
+        """The latest checkpoint's contents (networks, optimiser, curriculum levels)."""
+        return load_rsl_checkpoint(self.checkpoint)
+
+    def trained(self, task: str) -> bool:
+        """Whether this run trained `task` with rsl-rl (a fine-tune: its optimiser and levels go on)."""
+        return self.config.task == task and self.config.backend == "rsl"
+
+    def layout(self) -> dict:
+        """The observation layout of the task this run trained, without compiling its environment."""
+        if self.config.backend != "rsl":
+            raise RunDirError(f"cannot warm start from {self.run.path}: it was trained with the {self.config.backend} "
+                              "backend (warm starts read rsl-rl checkpoints)")
+        env = make(self.config.task, self.config.env)
+        if not hasattr(env, "observation_layout"):
+            raise RunDirError(f"cannot warm start from {self.run.path}: task {self.config.task} has no named "
+                              "observation layout")
+        return env.observation_layout()
 
 
-def source_levels(run_path: Path, task: str, num_envs: int) -> torch.Tensor | None:
-    """The curriculum level of each of `num_envs` environments for a warm start of `task` from `run_path`: its latest
+def _source(run: SourceRun | Path | str) -> SourceRun:
+    """`run` as a SourceRun (read now when given as a path)."""
+    return run if isinstance(run, SourceRun) else SourceRun(run)
+
+
+def source_levels(source: SourceRun | Path, task: str, num_envs: int) -> torch.Tensor | None:
+    """The curriculum level of each of `num_envs` environments for a warm start of `task` from `source`: its latest
     checkpoint's levels (repeated or cut to `num_envs`) if it trained the same task with a curriculum, else None. A
     fine-tune then goes on where its source stood instead of relearning the easiest levels, whose worlds its critic
     had stopped valuing (restarted at level 0 with a new optimiser, a 21M-step follower fell in 50-75% of its
     training episodes)."""
-    run = RunDir(Path(run_path))
-    config = run.load_config()
-    if config.task != task or config.backend != "rsl":  # another task's, or not one warm_start reads
+    source = _source(source)
+    if not source.trained(task):  # another task's, or not one warm_start reads
         return None
-    levels = load_rsl_checkpoint(run.latest_checkpoint()).get("curriculum_levels")
+    levels = source.payload.get("curriculum_levels")
     return None if levels is None else torch.as_tensor(np.resize(levels.numpy(), num_envs))
 
 
-def same_task_start(alg, run_path: Path, task: str) -> str | None:
-    """Load the latest actor and critic (normalisers and action noise included) of `run_path` into `alg` as they
+def same_task_start(alg, source: SourceRun, task: str) -> str | None:
+    """Load the latest actor and critic (normalisers and action noise included) of `source` into `alg` as they
     are, if that run trained `task` with rsl-rl on observations of the same sizes (a new run of the same task, e.g.
     with other rewards); None if it trained another task or other observations. Returns a summary."""
-    run = RunDir(Path(run_path))
-    config = run.load_config()
-    if config.task != task or config.backend != "rsl":
+    if not source.trained(task):
         return None
-    path = run.latest_checkpoint()
-    saved = load_rsl_checkpoint(path)["alg"]
+    path, saved = source.checkpoint, source.payload["alg"]
     nets = ((alg.actor, "actor_state_dict"), (alg.critic, "critic_state_dict"))
     differ = {name for net, key in nets for name, value in net.state_dict().items()
               if name in saved[key] and saved[key][name].shape != value.shape}
@@ -213,25 +232,25 @@ def rollout_statistics(venv, actor, hooks, steps: int = WARM_UP_STEPS) -> dict:
     return out
 
 
-def warm_start(alg, run_path: Path, env, obs, task: str = "", observe=None) -> str:
-    """Load `run_path`'s latest actor and critic into `alg` (rsl-rl PPO of `env`, training `task`): as they are
+def warm_start(alg, source: SourceRun | Path, env, obs, task: str = "", observe=None) -> str:
+    """Load `source`'s latest actor and critic into `alg` (rsl-rl PPO of `env`, training `task`): as they are
     if the source trained the same task, else through the observation layouts; `obs` is a first batch of
     observations (statistics of the new inputs). `observe(alg)`, when given, returns {group: (mean, std)} over a
     rollout of the warm-started policy (rollout_statistics): a warm start from the same task takes its new inputs'
     statistics from it. Returns a summary."""
-    same = same_task_start(alg, run_path, task)
+    source = _source(source)
+    same = same_task_start(alg, source, task)
     if same is not None:
         return same
     if not hasattr(env, "observation_layout"):
         raise RunDirError(f"cannot warm start this task ({type(env).__name__}): it has no named observation layout")
-    layout, path, source_task = source_layout(run_path)
-    saved = load_rsl_checkpoint(path)["alg"]
+    layout, path, saved = source.layout(), source.checkpoint, source.payload["alg"]
     target_layout = env.observation_layout()
     nets = ((alg.actor, "state", "actor_state_dict"), (alg.critic, "privileged_state", "critic_state_dict"))
     maps = {group: input_map(element_names(layout[group]), element_names(target_layout[group])) for _, group, _ in nets}
     # the same task: the source's statistics stay as settled as they were (restarting the count let the first
     # iterations' observations, e.g. a curriculum's easiest level, pull the settled ones away)
-    keep = source_task == task
+    keep = source.config.task == task
 
     def load(stats: dict) -> None:
         for net, group, key in nets:
