@@ -129,9 +129,13 @@ def robot_model(robot: RobotSpec, choice: str, ctrl_dt: float) -> RobotSpec:
 
 
 def mjx_model_of(model: mujoco.MjModel, robot: RobotSpec):
-    """`model` (the robot's, alone or in a scene) in MJX; RobotModelError naming the feature MJX lacks for it."""
+    """`model` (the robot's, alone or in a scene) in MJX, its spheres meeting height fields as in MuJoCo
+    (legged.mjx_collisions); RobotModelError naming the feature MJX lacks for it."""
     from mujoco import mjx
 
+    from legged import mjx_collisions
+
+    mjx_collisions.install()
     try:
         out = mjx.put_model(model)
         mjx.make_data(out)
