@@ -18,6 +18,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
+from legged import mjx_collisions
 from legged.envs.native import NativeEnvs, check_threads
 from legged.envs.vector import VectorEnv
 from legged.tasks import learner_env, make, task_entry
@@ -37,9 +38,10 @@ def time_calls(fn, state, seconds: float) -> tuple[object, int, float]:
     return state, calls, time.perf_counter() - t0
 
 
-PHYSICS_CHOICES = ("mjx", "native", "rollout")
-"""What `legged bench env --physics` measures: the task on MJX, the task on native MuJoCo, and bare native
-physics of the same model (no observations, rewards or policy: the physical limit of these cores)."""
+PHYSICS_CHOICES = ("mjx", "native", "rollout", "mjx-stock")
+"""What `legged bench env --physics` measures: the task on MJX, the task on native MuJoCo, bare native physics of
+the same model (no observations, rewards or policy: the physical limit of these cores), and the task on MJX with
+MJX's own sphere-height-field collision, which the project replaces (legged.mjx_collisions: what that costs)."""
 
 
 def _random_actions(env, batch: int, seed: int, count: int = 8) -> list[jax.Array]:
@@ -50,6 +52,10 @@ def _random_actions(env, batch: int, seed: int, count: int = 8) -> list[jax.Arra
 
 def bench_vector(env, physics: str, batch: int, seconds: float, seed: int, threads: int) -> dict:
     """env-steps/s of the auto-resetting vector env on one engine, with random actions."""
+    if physics == "mjx-stock":
+        env.mjx_model  # built (which installs the project's collision) before MJX's own is put back for this run
+        with mjx_collisions.mjx_own():
+            return bench_vector(env, "mjx", batch, seconds, seed, threads)
     t0 = time.perf_counter()
     vector = VectorEnv(env, batch, physics, threads)
     actions = _random_actions(env, batch, seed)
@@ -171,7 +177,7 @@ def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0
         if p not in PHYSICS_CHOICES:
             raise ValueError(f"unknown physics {p!r}; choose from {', '.join(PHYSICS_CHOICES)}")
         if p != "rollout":
-            entry.check(physics=p)
+            entry.check(physics="mjx" if p == "mjx-stock" else p)
     for r in randomize:
         if r not in ("default", "on", "off"):
             raise ValueError(f"--randomize takes default, on or off, not {r!r}")
@@ -188,7 +194,7 @@ def bench_env(task: str, batches: list[int], seconds: float = 3.0, seed: int = 0
                 r = bench_rollout(env, batch, seconds, seed, threads) if p == "rollout" else \
                     bench_vector(env, p, batch, seconds, seed, threads)
                 by_physics[p] = r = {"task": task, "batch": batch, "physics": p, **r,
-                                     "threads": threads if p != "mjx" else None, "ctrl_dt": env.dt,
+                                     "threads": None if p.startswith("mjx") else threads, "ctrl_dt": env.dt,
                                      "backend": jax.default_backend(), "randomize": setting}
                 records.append(r)
                 runs[(setting, p, batch)] = r

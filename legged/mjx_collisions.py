@@ -9,13 +9,15 @@ above the floor, passing over the rim of a 1 m void, was thrown sideways: the fo
 d4 worlds in MJX against 10% in native MuJoCo, at the deep voids.
 
 `install()` puts an exact sphere-prism test in MJX's collision table for (height field, sphere) pairs: the distance
-from the sphere's centre to the prism as a solid (the closest point of the faces the centre lies in front of; inside,
-the depth below the field's surface), and at most four contacts per sphere, within 1 mm of the deepest, at distinct points. Everything
+from the sphere's centre to the prism's top triangle (the field's surface; the sides and base of its prisms lie inside
+it), the depth below it for a centre within the prism, and at most four contacts per sphere, within 1 mm of the deepest, at distinct points. Everything
 else about MJX's height field collisions (which prisms are tried, the flip of normals that point into the field)
 stays MJX's. The project's MJX models are built through legged.robots.models.mjx_model_of, which installs it.
 """
 
 from __future__ import annotations
+
+import contextlib
 
 import jax
 import jax.numpy as jnp
@@ -30,42 +32,46 @@ TIE = 1e-3
 neighbouring triangle's edge."""
 
 
-def _closest_on_polygon(poly: jax.Array, normal: jax.Array, point: jax.Array) -> jax.Array:
-    """The point of the planar convex polygon `poly` (vertices in order, a repeated vertex allowed) nearest to
-    `point`."""
-    on_plane = point - jnp.dot(point - poly[0], normal) * normal
-    start, edge = poly, jnp.roll(poly, -1, axis=0) - poly
-    real = jnp.sum(edge * edge, axis=1) > 1e-12
-    side = jnp.einsum("ij,j->i", jnp.cross(edge, on_plane - start), normal)
-    inside = jnp.all(~real | (side >= -1e-9)) | jnp.all(~real | (side <= 1e-9))
-    t = jnp.clip(jnp.sum((on_plane - start) * edge, axis=1) / jnp.maximum(jnp.sum(edge * edge, axis=1), 1e-12), 0, 1)
-    on_edges = start + t[:, None] * edge
-    nearest = on_edges[jnp.argmin(jnp.sum((on_edges - point) ** 2, axis=1))]
-    return jnp.where(inside, on_plane, nearest)
-
-
 TOP = 1
 """Index of the top triangle among a height field prism's faces (mujoco.mjx._src.mesh.hfield_prism: bottom, top,
 three sides)."""
 
 
+def _inside(corners: jax.Array, point: jax.Array, normal: jax.Array) -> jax.Array:
+    """Whether `point` lies inside the triangle `corners` seen along `normal` (either winding)."""
+    side = jnp.einsum("ij,j->i", jnp.cross(jnp.roll(corners, -1, axis=0) - corners, point - corners), normal)
+    return jnp.all(side >= -1e-12) | jnp.all(side <= 1e-12)
+
+
+def _closest_on_triangle(corners: jax.Array, point: jax.Array, normal: jax.Array) -> jax.Array:
+    """The point of the triangle `corners` (its unit `normal`) nearest to `point`."""
+    on_plane = point - jnp.dot(point - corners[0], normal) * normal
+    edge = jnp.roll(corners, -1, axis=0) - corners
+    t = jnp.clip(jnp.sum((on_plane - corners) * edge, axis=1) / jnp.maximum(jnp.sum(edge * edge, axis=1), 1e-12),
+                 0.0, 1.0)
+    on_edges = corners + t[:, None] * edge
+    nearest = on_edges[jnp.argmin(jnp.sum((on_edges - point) ** 2, axis=1))]
+    return jnp.where(_inside(corners, on_plane, normal), on_plane, nearest)
+
+
 def sphere_prism(sphere, prism) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """(distance, contact point, normal from the sphere into the prism) of a sphere and a height field prism (MJX's
-    GeomInfo and ConvexInfo, faces with outward normals). A centre outside the prism: the exact distance to it, from
-    the closest point of the faces the centre lies in front of. A centre inside: its depth below the top triangle
-    (the sides and the base are inside the field, shared with the neighbouring prisms or under them)."""
+    """(distance, contact point, normal from the sphere into the field) of a sphere and one prism of a height field
+    (MJX's GeomInfo and ConvexInfo, in the field's frame). The field is the union of its prisms, whose sides and base
+    lie inside it: its surface is the prisms' top triangles. A centre in front of this prism's top: the exact
+    distance to that triangle. A centre under the top, within the prism: its depth below the top's plane. A centre
+    under the top's plane beside the prism: nothing here (the prism it lies in, or the triangle it faces, answers)."""
     centre = prism.mat.T @ (sphere.pos - prism.pos)
     radius = sphere.size[0]
-    ahead = jnp.einsum("fi,fi->f", centre - prism.face[:, 0], prism.face_normal)  # signed distance to each plane
-    nearest = jax.vmap(_closest_on_polygon, in_axes=(0, 0, None))(prism.face, prism.face_normal, centre)
-    gaps = jnp.where(ahead > 0, jnp.linalg.norm(nearest - centre, axis=1), jnp.inf)
-    k, top = jnp.argmin(gaps), prism.face_normal[TOP]
-    outside = jnp.any(ahead > 0)
-    # outside: towards the closest point (the top's normal when the centre lies on the surface)
-    towards = jnp.where(gaps[k] > 1e-9, (nearest[k] - centre) / jnp.maximum(gaps[k], 1e-9), -top)
-    normal = jnp.where(outside, towards, -top)
-    point = jnp.where(outside, nearest[k], centre - ahead[TOP] * top)
-    dist = jnp.where(outside, gaps[k], ahead[TOP]) - radius
+    corners, top = prism.face[TOP, :3], prism.face_normal[TOP]
+    ahead = jnp.dot(centre - corners[0], top)  # signed distance to the top's plane
+    closest = _closest_on_triangle(corners, centre, top)
+    gap = jnp.linalg.norm(closest - centre)
+    in_front = ahead >= 0
+    within = _inside(corners, centre, jnp.array([0.0, 0.0, 1.0]))  # over or under the triangle, along the field's z
+    towards = jnp.where(gap > 1e-9, (closest - centre) / jnp.maximum(gap, 1e-9), -top)
+    normal = jnp.where(in_front, towards, -top)
+    point = jnp.where(in_front, closest, centre - ahead * top)
+    dist = jnp.where(in_front, gap - radius, jnp.where(within, ahead - radius, 1.0))
     pos = (point + centre + normal * radius) / 2
     return dist, prism.mat @ pos + prism.pos, prism.mat @ normal
 
@@ -87,11 +93,27 @@ def hfield_sphere(field, sphere, subgrid_size) -> tuple[jax.Array, jax.Array, ja
     return dist, pos, jax.vmap(math.make_frame)(normal)
 
 
+PAIR = (GeomType.HFIELD, GeomType.SPHERE)
+"""The key of the replaced function in MJX's collision table."""
+
+
 def install() -> None:
     """Make MJX collide spheres with height fields through `hfield_sphere` (programs traced from now on)."""
-    collision_driver._COLLISION_FUNC[(GeomType.HFIELD, GeomType.SPHERE)] = hfield_sphere
+    collision_driver._COLLISION_FUNC[PAIR] = hfield_sphere
 
 
 def installed() -> bool:
     """Whether MJX's (height field, sphere) pairs go through `hfield_sphere`."""
-    return collision_driver._COLLISION_FUNC.get((GeomType.HFIELD, GeomType.SPHERE)) is hfield_sphere
+    return collision_driver._COLLISION_FUNC.get(PAIR) is hfield_sphere
+
+
+@contextlib.contextmanager
+def mjx_own():
+    """MJX's own (height field, sphere) function for the programs traced inside (`legged bench env --physics
+    mjx-stock` measures what the replacement costs); the function before it afterwards."""
+    before = collision_driver._COLLISION_FUNC[PAIR]
+    collision_driver._COLLISION_FUNC[PAIR] = collision_convex.hfield_sphere
+    try:
+        yield
+    finally:
+        collision_driver._COLLISION_FUNC[PAIR] = before

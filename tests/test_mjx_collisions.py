@@ -13,8 +13,6 @@ import mujoco
 import numpy as np
 import pytest
 from mujoco import mjx
-from mujoco.mjx._src import collision_convex, collision_driver
-from mujoco.mjx._src.types import GeomType
 
 from legged import mjx_collisions
 from legged.robots.go1 import GO1
@@ -79,12 +77,8 @@ def _mjx(model: mujoco.MjModel, places: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 @pytest.fixture
 def project_collider():
-    """MJX's collision table with the project's (height field, sphere) function, restored afterwards."""
-    key = (GeomType.HFIELD, GeomType.SPHERE)
-    before = collision_driver._COLLISION_FUNC[key]
+    """MJX's collision table with the project's (height field, sphere) function (as every project MJX model has)."""
     mjx_collisions.install()
-    yield
-    collision_driver._COLLISION_FUNC[key] = before
 
 
 def _exact_gap(place: np.ndarray, radius: float) -> float:
@@ -128,14 +122,15 @@ def test_mjx_own_sphere_test_finds_contacts_high_above_a_void(project_collider):
     the floor a metre deep. When this fails, MJX has been fixed and legged.mjx_collisions can go."""
     model = _model(0.057)
     places = np.array([(x, 0.01, 0.057 + 0.21) for x in np.arange(VOID[0] - 0.05, VOID[1] + 0.05, 0.005)])
-    key = (GeomType.HFIELD, GeomType.SPHERE)
-    collision_driver._COLLISION_FUNC[key] = collision_convex.hfield_sphere
-    dist, nz = _mjx(model, places)
+    with mjx_collisions.mjx_own():
+        dist, nz = _mjx(model, places)
     assert dist.min() < -0.5
     assert abs(nz[np.unravel_index(dist.argmin(), dist.shape)]) < 0.2
+    assert mjx_collisions.installed()  # put back
 
 
 def test_the_projects_mjx_models_collide_spheres_through_it():
-    collision_driver._COLLISION_FUNC[(GeomType.HFIELD, GeomType.SPHERE)] = collision_convex.hfield_sphere
-    mjx_model_of(_model(0.023), GO1)
-    assert mjx_collisions.installed()
+    with mjx_collisions.mjx_own():
+        assert not mjx_collisions.installed()
+        mjx_model_of(_model(0.023), GO1)
+        assert mjx_collisions.installed()

@@ -110,8 +110,10 @@ def add_bench_commands(sub) -> None:
     be.add_argument("--task", type=task_names, default=["confined-waypoints"],
                     help="comma-separated tasks, measured one after the other in this run")
     be.add_argument("--batch", type=ints(1, 65536), default=[1, 64, 256], help="comma-separated batch sizes")
-    be.add_argument("--physics", type=choices("mjx", "native", "rollout"), default=["mjx", "native", "rollout"],
-                    help="comma-separated: mjx, native (the task on each engine), rollout (bare native physics)")
+    be.add_argument("--physics", type=choices("mjx", "native", "rollout", "mjx-stock"),
+                    default=["mjx", "native", "rollout"],
+                    help="comma-separated: mjx, native (the task on each engine), rollout (bare native physics), "
+                         "mjx-stock (MJX with its own sphere-height-field collision, which the project replaces)")
     be.add_argument("--threads", type=THREADS, default=0, metavar="N",
                     help="threads of native physics (default: every core)")
     be.add_argument("--seconds", type=bounded(float, 0.0, 3600.0), default=3.0, help="timed seconds per batch size")
