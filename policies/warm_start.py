@@ -140,7 +140,11 @@ class SourceRun:
     def __init__(self, path: Path | str):
         self.run = RunDir(Path(path))
         self.config = self.run.load_config()
-        self.checkpoint = self.run.latest_checkpoint()
+
+    @cached_property
+    def checkpoint(self) -> Path:
+        """The latest checkpoint's path (looked up when first needed: a run of another backend fails on that first)."""
+        return self.run.latest_checkpoint()
 
     @cached_property
     def payload(self) -> dict:
