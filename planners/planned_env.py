@@ -27,6 +27,15 @@ def tile_paths(terrain: Terrain, worlds, plans) -> list[np.ndarray]:
     return out
 
 
+def follower_planner(env_config, planner: PlannerConfig) -> PlannerConfig:
+    """The planner for a follower trained on `env_config`: `planner`, with the turn limit the follower's training
+    plans had (`plan_turn_accel`) where `planner` sets none."""
+    turn_accel = getattr(env_config, "plan_turn_accel", None)
+    if planner.turn_accel is not None or turn_accel is None:
+        return planner
+    return dataclasses.replace(planner, turn_accel=turn_accel)
+
+
 def make_planned_env(task: str, planner: PlannerConfig = PlannerConfig(), cache_dir=None, workers: int = 1,
                      progress: bool = True, config=None, **overrides):
     """Build `task`; confined tasks get traversable worlds and planned waypoints, others are built as is."""
@@ -39,6 +48,7 @@ def make_planned_env(task: str, planner: PlannerConfig = PlannerConfig(), cache_
     if config.levels is None:  # a tunnel run saved before the level worlds: planned as it was (no strides, no walls)
         planner = dataclasses.replace(planner, body=dataclasses.replace(planner.body, stride_slack=0.0,
                                                                         step_height=None))
+    planner = follower_planner(config, planner)
     worlds, plans = feasible_worlds(config.num_worlds, config.world_seed, config.difficulties, config.world,
                                     entry.robot, planner, cache_dir, workers, progress=progress, levels=config.levels)
     terrain = Terrain.from_worlds(worlds)

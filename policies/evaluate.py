@@ -2,17 +2,19 @@
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 
 import jax
+import mujoco
 import numpy as np
 from scipy.stats import binomtest, norm
 from tqdm import tqdm
 
 from legged.envs.curriculum import level_carry
 from legged.envs.vector import VectorEnv
-from legged.robots.models import checked_model
+from legged.robots.models import checked_model, mjx_model_of
 from legged.tasks import task_entry
 from policies.algorithms import privileged_slices
 from policies.environments import build_env, soccer_opponent, steer_with_pilot  # noqa: F401 (the last two: re-exports)
@@ -122,6 +124,8 @@ def summarize(finals: list[dict], confined: bool) -> dict:
            "episode_length_steps": float(np.mean([f["length"] for f in finals]))}
     terms = sorted(k for k in finals[0] if k.startswith("reward/"))
     out["reward_terms"] = {k[7:]: float(np.mean([f[k] for f in finals])) for k in terms}
+    if "elliptic_cone" in finals[0]:  # the share of robots that drew elliptic friction cones
+        out["elliptic_cone_share"] = float(np.mean([f["elliptic_cone"] for f in finals]))
     if "fell" in finals[0]:
         out["fall_rate"] = float(np.mean([f["fell"] > 0 for f in finals]))
     if "tracking_error_mps" in finals[0]:  # velocity tracking: mean |commanded - actual| planar base velocity
@@ -202,22 +206,58 @@ def state_player_game(config):
     return build_env(dataclasses.replace(config, env=env))
 
 
+def mjx_cone_envs(env) -> dict[float, object]:
+    """The environments an MJX evaluation runs, keyed by the friction-cone draw whose episodes each serves (0: the
+    model's own cone, 1: elliptic). Native MuJoCo gives each robot the cone its randomisation draws
+    (`RandomizationConfig.elliptic_share`); MJX compiles one cone into its programs, so where a pyramidal model draws
+    elliptic cones for some robots, the episodes run once per cone and each keeps the run of its own draw."""
+    randomization = getattr(env.config, "randomization", None)
+    share = getattr(randomization, "elliptic_share", None)
+    elliptic = int(mujoco.mjtCone.mjCONE_ELLIPTIC)
+    if not getattr(randomization, "enabled", False) or not share or int(env.mj_model.opt.cone) == elliptic:
+        return {0.0: env}
+    model = copy.copy(env.mj_model)
+    model.opt.cone = elliptic
+    other = copy.copy(env)  # the same task; only its MJX model (a cached property of LeggedEnv) differs
+    other.__dict__["mjx_model"] = mjx_model_of(model, env.robot)
+    return {1.0: other} if share >= 1 else {0.0: env, 1.0: other}
+
+
 def evaluate(env, policy, episodes: int, seed: int, physics: str = "mjx", num_envs: int = 16,
              threads: int | None = None, progress: bool = True, per_world: bool = False,
              probe: list | None = None, env_args: tuple = ()) -> list[dict]:
     """Run the deterministic policy for exactly `episodes` episodes, each to its end: `num_envs` environments
     at a time, each contributing its first episode only (counting the first episodes to finish would favour
     short ones, i.e. falls). The episodes' reset keys depend on `seed` and `num_envs` only, not on the physics
-    engine: both engines start the same episodes. per_world (confined tasks): episode k plays world k of the
-    terrain (see `confined_eval_config`). `probe`, a list, receives (policy features, privileged state, episode ids)
-    of every 10th step of the episodes (see `latent_probe`). `env_args` go to every step (a soccer opponent)."""
+    engine: both engines start the same episodes, with the same robots (in MJX, each with the friction cone it drew:
+    `mjx_cone_envs`). Each episode's statistics hold `elliptic_cone` (1: its robot drew an elliptic cone) where the
+    task draws cones. per_world (confined tasks): episode k plays world k of the terrain (see
+    `confined_eval_config`). `probe`, a list, receives (policy features, privileged state, episode ids) of every 10th
+    step of the episodes (see `latent_probe`). `env_args` go to every step (a soccer opponent)."""
+    runs = mjx_cone_envs(env) if physics == "mjx" else {None: env}
+    if len(runs) == 1:
+        return _episodes(next(iter(runs.values())), policy, episodes, seed, physics, num_envs, threads, progress,
+                         per_world, probe, env_args, None)
+    finals = {drawn: _episodes(run, policy, episodes, seed, physics, num_envs, threads, progress, per_world, probe,
+                               env_args, drawn) for drawn, run in runs.items()}
+    first = finals[0.0]
+    return [finals[f["elliptic_cone"]][k] for k, f in enumerate(first)]
+
+
+def _episodes(env, policy, episodes: int, seed: int, physics: str, num_envs: int, threads: int | None,
+              progress: bool, per_world: bool, probe: list | None, env_args: tuple, cone: float | None) -> list[dict]:
+    """`evaluate` in one engine with one model; `cone` (a friction-cone draw, or None: any): the episodes this run
+    serves, the only ones it probes."""
     num_envs = min(num_envs, episodes)
     vector = VectorEnv.of(env, num_envs, physics, threads)
     finals: list[dict] = []
-    bar = tqdm(total=episodes, desc=f"eval ({physics})", unit="episode", disable=not progress)
+    label = physics if cone is None else f"{physics}, {'elliptic' if cone else 'own'} cones"
+    bar = tqdm(total=episodes, desc=f"eval ({label})", unit="episode", disable=not progress)
     for first in range(0, episodes, num_envs):
         carry = one_tile_each(first, num_envs, env.terrain.num_tiles) if per_world else None
         batch = vector.reset(jax.random.fold_in(jax.random.PRNGKey(seed), first), carry)
+        drawn = _cone_draws(batch.state.info, num_envs)
+        served = np.ones(num_envs, bool) if cone is None or drawn is None else drawn == cone
         policy.reset()
         obs, pending = batch.state.obs, np.ones(num_envs, bool)
         pending[episodes - first:] = False  # the last round may need fewer environments
@@ -226,9 +266,10 @@ def evaluate(env, policy, episodes: int, seed: int, physics: str = "mjx", num_en
         while pending.any():
             if probe is not None and steps % 10 == 0 and getattr(policy, "features", None) is not None:
                 features = policy.features({k: np.asarray(v) for k, v in obs.items()})
-                if features is not None:
-                    probe.append((features[pending], np.asarray(obs["privileged_state"])[pending],
-                                  first + np.flatnonzero(pending)))  # the episodes' ids
+                probed = pending & served
+                if features is not None and probed.any():
+                    probe.append((features[probed], np.asarray(obs["privileged_state"])[probed],
+                                  first + np.flatnonzero(probed)))  # the episodes' ids
             steps += 1
             batch, result = vector.step(batch, jax.numpy.asarray(policy.act(actor_observation(obs, policy.inputs))),
                                         *env_args)
@@ -239,11 +280,22 @@ def evaluate(env, policy, episodes: int, seed: int, physics: str = "mjx", num_en
                 stats = {k: np.asarray(v) for k, v in result.finished.items()}
                 for i in np.flatnonzero(ended):
                     chunk[i] = {k: float(v[i]) for k, v in stats.items()}
+                    if drawn is not None:
+                        chunk[i]["elliptic_cone"] = float(drawn[i])
                 pending &= ~ended
                 bar.update(int(ended.sum()))
         finals.extend(chunk[i] for i in sorted(chunk))
     bar.close()
     return finals
+
+
+def _cone_draws(info: dict, num_envs: int) -> np.ndarray | None:
+    """Each environment's friction-cone draw (1: elliptic) in a reset batch's `info`, or None where the task draws
+    none."""
+    dr = info.get("dr") if isinstance(info, dict) else None
+    if not isinstance(dr, dict) or "elliptic" not in dr:
+        return None
+    return np.broadcast_to(np.asarray(dr["elliptic"], np.float32), (num_envs,)).copy()
 
 
 def latent_probe(samples: list, layout: dict) -> float | None:

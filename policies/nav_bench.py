@@ -15,7 +15,7 @@ import numpy as np
 from tqdm import tqdm
 
 from legged.worlds.scenes import SPEED, read_scene, scene_files
-from planners import PlannerConfig, navigation_maps
+from planners import PlannerConfig, follower_planner, navigation_maps
 from policies.evaluate import wilson_interval
 from policies.navigate import NavigationError, Unreachable, check_speed_limit, load_follower, navigate_seeds
 
@@ -91,7 +91,7 @@ def bench_navigate(scenes_dir, policy_dir, seeds: int = 5, first_seed: int = 0, 
     ratios = [r["time_vs_path_at_speed"] for r in rows if r["time_vs_path_at_speed"] is not None]
     return {"scenes_dir": str(scenes_dir), "policy": str(policy_dir), "robot": robot, "physics": physics,
             "seeds": list(range(first_seed, first_seed + seeds)), "speed_limit_mps": speed,
-            "planner": dataclasses.asdict(planner),
+            "planner": dataclasses.asdict(follower_planner(run_config.env, planner)),
             "total": {"scenes": len(rows), "episodes": episodes, "successes": wins,
                       "success_rate": round(wins / episodes, 4), "success_interval_95": wilson_interval(wins, episodes),
                       "worst_scene_success": min(r["success_rate"] for r in rows),

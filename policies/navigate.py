@@ -25,6 +25,7 @@ from legged.worlds.maps import HeightMaps
 from legged.worlds.terrain import Terrain
 from planners.body_check import BodyChecker
 from planners.body_planner import PlannerConfig, PlanningError, plan_path, replan
+from planners.planned_env import follower_planner
 from policies.evaluate import nominal_config, on_robot, whole_episodes
 from policies.policy_io import actor_observation, load_policy
 from policies.run_dir import RunDir, RunDirError, check_policy
@@ -136,6 +137,7 @@ def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], phy
     control step."""
     check_speed_limit(max_speed)
     policy, run_config = load_follower(run_dir, robot, physics)
+    planner = follower_planner(run_config.env, planner)  # the turn limit the follower trained under, if any
     if nominal:
         run_config = dataclasses.replace(run_config, env=nominal_config(run_config.env))
     spec = task_entry(run_config.task).robot

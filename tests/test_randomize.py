@@ -175,6 +175,34 @@ def test_the_friction_cone_is_drawn_per_robot_in_the_native_engine_and_its_impra
     assert names[-2:] == ["model_dynamics", "friction_cone"]
 
 
+def test_an_mjx_evaluation_runs_each_robot_with_the_cone_it_drew(monkeypatch):
+    """MJX compiles one friction cone, so an MJX evaluation of a pyramidal model that draws elliptic cones for some
+    robots runs its episodes once per cone and keeps, for each episode, the run of the cone its robot drew (the
+    native engine draws per robot); one run where every robot has the same cone."""
+    import policies.evaluate as evaluation
+    from legged.tasks import make
+
+    env = make("go1-flat")
+    runs = evaluation.mjx_cone_envs(env)
+    assert set(runs) == {0.0, 1.0} and runs[0.0] is env
+    assert runs[1.0].mjx_model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+    assert env.mjx_model.opt.cone == env.mj_model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL  # untouched
+    for randomization in (dataclasses.replace(GO1_RANDOMIZATION, elliptic_share=None), RandomizationConfig()):
+        alone = make("go1-flat", randomization=randomization)
+        assert list(evaluation.mjx_cone_envs(alone).values()) == [alone]
+    every = evaluation.mjx_cone_envs(make("go1-flat", randomization=dataclasses.replace(GO1_RANDOMIZATION,
+                                                                                          elliptic_share=1.0)))
+    assert list(every) == [1.0]
+
+    drawn = [0.0, 1.0, 1.0, 0.0]
+    monkeypatch.setattr(evaluation, "_episodes", lambda run, *args: [{"elliptic_cone": d, "run": args[-1]}
+                                                                      for d in drawn])
+    assert [f["run"] for f in evaluation.evaluate(env, None, 4, 0, "mjx")] == drawn
+    assert [f["run"] for f in evaluation.evaluate(env, None, 4, 0, "native")] == [None] * 4  # one run, every cone
+    assert evaluation._cone_draws({"dr": {"elliptic": jnp.asarray(drawn)}}, 4).tolist() == drawn
+    assert evaluation._cone_draws({"dr": {}}, 4) is None
+
+
 def test_nominal_evaluation_turns_randomisation_and_noise_off_and_nothing_else():
     import dataclasses
 

@@ -253,3 +253,44 @@ def test_navigation_draws_a_robot_per_episode_unless_asked_for_it_as_it_is(monke
             nav.navigate_seeds(str(shipped), world, world.start, world.goal, [0], nominal=nominal)
     assert [(c.randomization.enabled, c.noise.enabled) for c in seen] == [(True, True), (False, False)]
     assert all(c.stall_timeout_s == float("inf") for c in seen)  # a stalled robot is replanned, never cut short
+
+
+def test_training_plans_and_navigation_share_the_followers_turn_limit(monkeypatch):
+    """`env.plan_turn_accel`: the training worlds are planned with it, and navigation with such a follower plans with
+    it unless told another turn limit."""
+    import planners.planned_env as planned
+    import policies.navigate as nav
+    from planners import PlannerConfig, follower_planner
+
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="plan_turn_accel"):
+            ConfinedConfig(plan_turn_accel=bad)
+    trained = ConfinedConfig(plan_turn_accel=1.0)
+    assert follower_planner(trained, PlannerConfig()).turn_accel == 1.0
+    assert follower_planner(trained, PlannerConfig(turn_accel=2.0)).turn_accel == 2.0  # the user's wins
+    assert follower_planner(ConfinedConfig(), PlannerConfig()) == PlannerConfig()  # older runs: as before
+
+    class Planned(Exception):
+        pass
+
+    seen = []
+
+    def planning(*args, **kwargs):
+        seen.append(next(a for a in (*args, *kwargs.values()) if isinstance(a, PlannerConfig)))
+        raise Planned
+
+    monkeypatch.setattr(planned, "feasible_worlds", planning)
+    with pytest.raises(Planned):
+        planned.make_planned_env("confined-waypoints", num_worlds=2, plan_turn_accel=0.8)
+    real_load = nav.load_follower
+
+    def follower_with_turns(*args, **kwargs):
+        policy, config = real_load(*args, **kwargs)
+        return policy, dataclasses.replace(config, env=dataclasses.replace(config.env, plan_turn_accel=0.7))
+
+    monkeypatch.setattr(nav, "load_follower", follower_with_turns)
+    monkeypatch.setattr(nav, "plan_path", planning)
+    world = generate_world(11, 0)
+    with pytest.raises(Planned):
+        nav.navigate_seeds(str(FOLLOWER.parent / "go1-confined-follower"), world, world.start, world.goal, [0])
+    assert [p.turn_accel for p in seen] == [0.8, 0.7]

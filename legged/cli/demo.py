@@ -26,20 +26,21 @@ def run_demo(out: str, seed: int, difficulty: int, policy_dir: str, view: dict |
     the dashboard is served afterwards on the demo's world, rolling out the follower."""
     from legged.robots import GO1
     from legged.worlds import write_world
-    from planners import HeightMaps, PlannerConfig, plan_path
+    from planners import HeightMaps, PlannerConfig, follower_planner, plan_path
     from policies.navigate import load_follower, navigate
 
     if view is not None:
         from web.source import check_port
 
         check_port(view["host"], view["port"])  # fail before the demo's minute of work
-    load_follower(policy_dir)  # a missing or foreign policy fails before any work
+    _, follower = load_follower(policy_dir)  # a missing or foreign policy fails before any work
     world = generated_world(seed, level, difficulty)
     files = write_world(world, GO1, out)
     kind = f"tunnel difficulty={difficulty}" if level is None else f"level={level}"
     print(f"[demo] world seed={seed} {kind}: {world.summary()['size_m']} m, "
           f"min clearance {world.min_clearance:.2f} m -> {files['xml']}")
-    plan = plan_path(HeightMaps.from_world(world), world.start, world.goal, GO1, PlannerConfig())
+    plan = plan_path(HeightMaps.from_world(world), world.start, world.goal, GO1,
+                     follower_planner(follower.env, PlannerConfig()))  # the plan navigate() makes
     print(f"[demo] {plan.planner} planned {len(plan.waypoints)} body-pose waypoints, {plan.length_m:.2f} m, "
           f"in {plan.plan_time_s:.2f} s (lowest body height {plan.waypoints[:, 2].min():.3f} m)")
     runs = {}
@@ -69,14 +70,14 @@ def _serve(world, plan, policy_dir: str, seed: int, view: dict, physics: str) ->
     from legged.envs.confined import ConfinedEnv
     from legged.robots import GO1
     from legged.worlds import Terrain
-    from policies.navigate import episode_config, load_follower, nominal_config
+    from policies.navigate import episode_config, load_follower, nominal_config, plan_speeds
     from web.app import Dashboard, DashboardConfig
     from web.rollout import RecorderConfig
     from web.source import RolloutSource
 
     policy, config = load_follower(policy_dir)
     env_config = episode_config(nominal_config(config.env))
-    env = ConfinedEnv(env_config, GO1, Terrain.from_worlds([world]), [plan.waypoints])
+    env = ConfinedEnv(env_config, GO1, Terrain.from_worlds([world]), [plan.waypoints], speeds=[plan_speeds(plan)])
     source = RolloutSource(env, f"{config.task} (demo world)", RecorderConfig(physics=physics), policy)
     dashboard = Dashboard(DashboardConfig(host=view["host"], port=view["port"], seed=seed,
                                           steps=env.config.episode_steps), source=source)

@@ -162,7 +162,8 @@ def _add_planner_options(parser) -> None:
                         help="speed limit of the plan where the body must crouch (under bars and low roofs)")
     parser.add_argument("--turn-accel", type=bounded(float, 0.0, 100.0), default=None, metavar="M/S2",
                         help="largest sideways acceleration the plan asks for in its turns: where the path turns, the "
-                             "speed limit is sqrt(this / curvature)")
+                             "speed limit is sqrt(this / curvature) (default: the follower's env.plan_turn_accel, "
+                             "the limit its training plans had, if any)")
 
 
 SHIPPED_FOLLOWER = "assets/policies/go1-confined-follower"

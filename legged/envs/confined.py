@@ -112,6 +112,10 @@ class ConfinedConfig(EnvConfig):
     """Waypoints mode: the command also holds the waypoint after the current one (its dx, dy in the yaw frame; the
     goal's own at the goal), so that a turn shows before the robot reaches it. Off for runs saved before it
     existed."""
+    plan_turn_accel: float | None = None
+    """Planned worlds: the planner's `turn_accel` for their plans, m/s^2 (a turn's waypoints carry the speed limit
+    sqrt(turn_accel / curvature), so training meets the slower turns navigation asks for); navigation with such a
+    follower plans with it too unless told otherwise. None: no limit of the plans' own."""
     spawn_yaw: float = 0.3
     """Initial heading is uniform in +-this, radians."""
     curriculum: bool = True
@@ -141,6 +145,9 @@ class ConfinedConfig(EnvConfig):
         if not self.stall_timeout_s > 0.0:  # NaN fails here too
             raise ValueError(f"stall_timeout_s must be a positive number of seconds (inf: never), got "
                              f"{self.stall_timeout_s!r}")
+        if self.plan_turn_accel is not None and not 0.0 < self.plan_turn_accel < math.inf:
+            raise ValueError(f"plan_turn_accel must be a positive acceleration in m/s^2 (or null: none), got "
+                             f"{self.plan_turn_accel!r}")
         if self.speed_range is not None:
             r = tuple(self.speed_range)
             if len(r) != 2 or not 0.0 < r[0] <= r[1] < math.inf:
