@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
 
@@ -14,7 +13,7 @@ from tqdm import tqdm
 
 from legged.envs.curriculum import level_carry
 from legged.envs.vector import VectorEnv
-from legged.robots.models import checked_model, mjx_model_of
+from legged.robots.models import checked_model
 from legged.tasks import task_entry
 from policies.algorithms import privileged_slices
 from policies.environments import build_env, soccer_opponent, steer_with_pilot  # noqa: F401 (the last two: re-exports)
@@ -216,10 +215,7 @@ def mjx_cone_envs(env) -> dict[float, object]:
     elliptic = int(mujoco.mjtCone.mjCONE_ELLIPTIC)
     if not getattr(randomization, "enabled", False) or not share or int(env.mj_model.opt.cone) == elliptic:
         return {0.0: env}
-    model = copy.copy(env.mj_model)
-    model.opt.cone = elliptic
-    other = copy.copy(env)  # the same task; only its MJX model (a cached property of LeggedEnv) differs
-    other.__dict__["mjx_model"] = mjx_model_of(model, env.robot)
+    other = env.with_cone(elliptic)
     return {1.0: other} if share >= 1 else {0.0: env, 1.0: other}
 
 

@@ -187,6 +187,10 @@ def test_an_mjx_evaluation_runs_each_robot_with_the_cone_it_drew(monkeypatch):
     assert set(runs) == {0.0, 1.0} and runs[0.0] is env
     assert runs[1.0].mjx_model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
     assert env.mjx_model.opt.cone == env.mj_model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL  # untouched
+    # the contact read-out follows the cone: an elliptic contact's normal force is its first constraint row, a
+    # pyramidal one's the sum of its 2 (dim - 1) edges (else the elliptic run counted collisions from wrong rows)
+    assert set(runs[1.0]._contacts._row_mask.sum(-1).tolist()) == {1.0}
+    assert set(env._contacts._row_mask.sum(-1).tolist()) == {4.0, 10.0}  # condim-3 trunk, condim-6 feet
     for randomization in (dataclasses.replace(GO1_RANDOMIZATION, elliptic_share=None), RandomizationConfig()):
         alone = make("go1-flat", randomization=randomization)
         assert list(evaluation.mjx_cone_envs(alone).values()) == [alone]

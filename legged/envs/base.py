@@ -9,6 +9,7 @@ are the same code whether physics runs in MJX (`reset`/`step`, legged.envs.api) 
 from __future__ import annotations
 
 import abc
+import copy
 import dataclasses
 import functools
 
@@ -109,6 +110,16 @@ class LeggedEnv(MjxEnv, abc.ABC):
     @functools.cached_property
     def _contacts(self) -> MjxContactReader:
         return MjxContactReader(self.mj_model, self.mjx_model, np.concatenate([self._feet, self._body_geoms]))
+
+    def with_cone(self, cone: int):
+        """This task with its model's friction cone `cone` (mujoco.mjtCone), for MJX, which compiles one cone into its
+        programs where the native engine takes each robot's draw (policies.evaluate.mjx_cone_envs)."""
+        out = copy.copy(self)
+        out.mj_model = copy.copy(self.mj_model)
+        out.mj_model.opt.cone = cone
+        for cached in ("mjx_model", "_contacts"):  # built again from the new model when first needed
+            vars(out).pop(cached, None)
+        return out
 
     # ----------------------------------------------------------------- task hooks
     @abc.abstractmethod
