@@ -9,9 +9,7 @@ are the same code whether physics runs in MJX (`reset`/`step`, legged.envs.api) 
 from __future__ import annotations
 
 import abc
-import copy
 import dataclasses
-import functools
 
 import jax
 import jax.numpy as jnp
@@ -22,14 +20,14 @@ from mujoco import mjx
 
 from legged.envs.api import MjxEnv
 from legged.envs.config import EnvConfig
-from legged.envs.contacts import MjxContactReader
+from legged.envs.engine_models import EngineModels
 from legged.envs.physics import PhysicsView, Spawn
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
 from legged.envs.motor import motor_limits, servo_gains, within_motor_curve
 from legged.envs.rewards import penalty_terms, step_reward
-from legged.envs.randomize import (CONE_DR, MODEL_DR, check_latency, draw, late_controls, mjx_fields,
-                                   nominal_draw, randomized_fields, weakened)
-from legged.robots.models import mjx_model_of, robot_model
+from legged.envs.randomize import (CONE_DR, MODEL_DR, check_latency, draw, late_controls, nominal_draw,
+                                   weakened)
+from legged.robots.models import robot_model
 from legged.robots.spec import RobotSpec
 from legged.sensors.heightscan import surface_height
 from legged.worlds.mjcf import SceneOptions, compile_scene
@@ -40,7 +38,7 @@ PAST_PARTS = ("joint_pos", "joint_vel", "last_action")
 """The `state` entries `EnvConfig.past_steps` remembers, in the order they appear as past_<name>."""
 
 
-class LeggedEnv(MjxEnv, abc.ABC):
+class LeggedEnv(EngineModels, MjxEnv, abc.ABC):
     """A Brax-compatible MJX environment for one legged robot on a terrain."""
 
     def __init__(self, robot: RobotSpec, terrain: Terrain, scene: SceneOptions, config: EnvConfig):
@@ -99,27 +97,6 @@ class LeggedEnv(MjxEnv, abc.ABC):
         if push.push_interval_s < 0 or push.push_velocity < 0:
             raise ValueError(f"push_interval_s and push_velocity must be >= 0, got {push.push_interval_s} and "
                              f"{push.push_velocity}")
-
-    @functools.cached_property
-    def mjx_model(self):
-        """The model in MJX, built on first use (native physics never needs it); an error naming the cause
-        for a robot model MJX cannot run (RobotModelError)."""
-        with jax.ensure_compile_time_eval():  # concrete arrays even when first needed inside a traced function
-            return mjx_model_of(self.mj_model, self.robot)
-
-    @functools.cached_property
-    def _contacts(self) -> MjxContactReader:
-        return MjxContactReader(self.mj_model, self.mjx_model, np.concatenate([self._feet, self._body_geoms]))
-
-    def with_cone(self, cone: int):
-        """This task with its model's friction cone `cone` (mujoco.mjtCone), for MJX, which compiles one cone into its
-        programs where the native engine takes each robot's draw (policies.evaluate.mjx_cone_envs)."""
-        out = copy.copy(self)
-        out.mj_model = copy.copy(self.mj_model)
-        out.mj_model.opt.cone = cone
-        for cached in ("mjx_model", "_contacts"):  # built again from the new model when first needed
-            vars(out).pop(cached, None)
-        return out
 
     # ----------------------------------------------------------------- task hooks
     @abc.abstractmethod
@@ -217,13 +194,6 @@ class LeggedEnv(MjxEnv, abc.ABC):
         return draw(self.config.randomization, rng, m.nbody, m.nu, self.config.sim_dt, self.n_substeps,
                     nominal_friction)
 
-    def model_with(self, dr: dict):
-        """The MJX model with randomisation `dr` applied (the nominal model when disabled)."""
-        if not self.config.randomization.enabled:
-            return self.mjx_model
-        return self.mjx_model.replace(**mjx_fields(self.mjx_model, randomized_fields(self._base_fields, dr,
-                                                                                     self._trunk)))
-
     def joint_targets(self, action: jax.Array) -> jax.Array:
         """PD targets (actuator controls) for an action."""
         a = jnp.clip(action, -self.config.action_clip, self.config.action_clip)
@@ -231,27 +201,6 @@ class LeggedEnv(MjxEnv, abc.ABC):
         return jnp.clip(target, self._ctrl_range[:, 0], self._ctrl_range[:, 1])
 
     # ----------------------------------------------------------------- engine verbs and read-outs
-    def mjx_model_for(self, info: dict):
-        return self.model_with(info["dr"])
-
-    def native_model_fields(self, info: dict, rows: np.ndarray) -> dict:
-        if not self.config.randomization.enabled:
-            return {}
-        dr = jax.tree_util.tree_map(lambda x: np.asarray(x)[rows], info["dr"])
-        nominal = {k: np.array(v) for k, v in self._base_fields.items()}
-        return randomized_fields(nominal, dr, self._trunk, xp=np)
-
-    @property
-    def watched_geoms(self) -> np.ndarray:
-        return np.concatenate([self._feet, self._body_geoms])
-
-    def native_model(self) -> mujoco.MjModel:
-        """The scene with a contact sensor on every watched geom, for the native engine."""
-        names = tuple(self.robot.feet_geoms) + tuple(self.robot.body_geoms)
-        model = compile_scene(self.terrain, self.robot, self.scene, contact_sensors=names)
-        model.opt.timestep = self.config.sim_dt
-        return model
-
     def slot_forces(self, forces: jax.Array) -> jax.Array:
         """Watched-geom normal forces (feet, then trunk geoms) as the observations hold them: feet, then the trunk
         geoms pooled into the project model's trunk slots where the model's differ."""
@@ -259,10 +208,6 @@ class LeggedEnv(MjxEnv, abc.ABC):
             return forces
         n = len(self._feet)
         return jnp.concatenate([forces[..., :n], forces[..., n:] @ self._body_pool], -1)
-
-    def contact_forces(self, data) -> jax.Array:
-        """Normal contact force on each foot, then on each body geom (N), of an MJX data."""
-        return self._contacts(data)
 
     def spawn(self, rng: jax.Array, carry: dict | None = None) -> Spawn:
         """A new episode; a carried `dr_scale` (a training run's randomisation ramp or curriculum,
