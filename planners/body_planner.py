@@ -26,6 +26,7 @@ from legged.robots import GO1
 from legged.robots.spec import RobotSpec
 from planners.body_check import BodyCheckConfig, BodyChecker
 from planners.box_space import BoxSpace
+from planners.headings import face_travel
 from planners.lattice import lattice_path, shortcut
 from planners.pose_band import ProjectedSpace
 from legged.worlds.maps import HeightMaps
@@ -103,6 +104,10 @@ class PlannerConfig:
     k (a waypoint's turn angle over the mean length of the segments beside it), the speed limit there and at the next
     waypoint is sqrt(turn_accel / k); the plan's `speeds` hand it to the follower (None: no limit of the plan's
     own)."""
+    face_travel: bool | None = None
+    """True: turn each waypoint after the start to the direction the path travels through it, where the body fits
+    that way (planners.headings); False: the search's headings, which turn the body as little as they can; None: as
+    False, unless navigation sets a follower's own choice (planners.follower_planner)."""
     space: str = "projected"
     """projected: search x, y, yaw, with height, roll and pitch put in the middle of the feasible band
     (planners.pose_band; narrow height bands cost nothing); full: sample all six (the earlier planner)."""
@@ -284,16 +289,22 @@ def plan_path(maps: HeightMaps, start, goal, robot: RobotSpec = GO1, config: Pla
     _check_endpoint("goal", goal_pose, checker, space, config)
 
     if name == LATTICE:
-        return _lattice_plan(space, checker, start_pose, goal_pose, config)
-    if name == AUTO:
+        plan = _lattice_plan(space, checker, start_pose, goal_pose, config)
+    elif name == AUTO:
         began = time.perf_counter()
         try:
             quick = dataclasses.replace(config, planner="rrtconnect")
-            return _ompl_plan(space, checker, start_pose, goal_pose, quick, max_checks=config.quick_checks)
+            plan = _ompl_plan(space, checker, start_pose, goal_pose, quick, max_checks=config.quick_checks)
         except PlanningError:
             plan = _lattice_plan(space, checker, start_pose, goal_pose, config)
-            return dataclasses.replace(plan, plan_time_s=time.perf_counter() - began)
-    return _ompl_plan(space, checker, start_pose, goal_pose, config, max_checks=config.max_checks)
+            plan = dataclasses.replace(plan, plan_time_s=time.perf_counter() - began)
+    else:
+        plan = _ompl_plan(space, checker, start_pose, goal_pose, config, max_checks=config.max_checks)
+    if not config.face_travel:
+        return plan
+    keep_goal = goal.shape == (6,)  # a full goal pose keeps its heading; a goal position takes the path's
+    return dataclasses.replace(plan, waypoints=face_travel(plan.waypoints, space, checker, config.check_step,
+                                                           keep_goal))
 
 
 def _ompl_plan(space, checker, start_pose, goal_pose, config: PlannerConfig, max_checks: int = 0) -> Plan:

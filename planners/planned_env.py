@@ -29,11 +29,13 @@ def tile_paths(terrain: Terrain, worlds, plans) -> list[np.ndarray]:
 
 def follower_planner(env_config, planner: PlannerConfig) -> PlannerConfig:
     """The planner for a follower trained on `env_config`: `planner`, with the turn limit the follower's training
-    plans had (`plan_turn_accel`) where `planner` sets none."""
+    plans had (`plan_turn_accel`) and their headings (`plan_face_travel`) where `planner` sets none."""
     turn_accel = getattr(env_config, "plan_turn_accel", None)
-    if planner.turn_accel is not None or turn_accel is None:
-        return planner
-    return dataclasses.replace(planner, turn_accel=turn_accel)
+    if planner.turn_accel is None and turn_accel is not None:
+        planner = dataclasses.replace(planner, turn_accel=turn_accel)
+    if planner.face_travel is None and getattr(env_config, "plan_face_travel", False):
+        planner = dataclasses.replace(planner, face_travel=True)
+    return planner
 
 
 def make_planned_env(task: str, planner: PlannerConfig = PlannerConfig(), cache_dir=None, workers: int = 1,

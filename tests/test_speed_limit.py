@@ -255,9 +255,9 @@ def test_navigation_draws_a_robot_per_episode_unless_asked_for_it_as_it_is(monke
     assert all(c.stall_timeout_s == float("inf") for c in seen)  # a stalled robot is replanned, never cut short
 
 
-def test_training_plans_and_navigation_share_the_followers_turn_limit(monkeypatch):
-    """`env.plan_turn_accel`: the training worlds are planned with it, and navigation with such a follower plans with
-    it unless told another turn limit."""
+def test_training_plans_and_navigation_share_the_followers_turn_limit_and_headings(monkeypatch):
+    """`env.plan_turn_accel` and `env.plan_face_travel`: the training worlds are planned with them, and navigation with
+    such a follower plans with them unless told otherwise."""
     import planners.planned_env as planned
     import policies.navigate as nav
     from planners import PlannerConfig, follower_planner
@@ -269,6 +269,9 @@ def test_training_plans_and_navigation_share_the_followers_turn_limit(monkeypatc
     assert follower_planner(trained, PlannerConfig()).turn_accel == 1.0
     assert follower_planner(trained, PlannerConfig(turn_accel=2.0)).turn_accel == 2.0  # the user's wins
     assert follower_planner(ConfinedConfig(), PlannerConfig()) == PlannerConfig()  # older runs: as before
+    facing = ConfinedConfig(plan_face_travel=True)
+    assert follower_planner(facing, PlannerConfig()).face_travel is True
+    assert follower_planner(facing, PlannerConfig(face_travel=False)).face_travel is False  # the user's wins
 
     class Planned(Exception):
         pass
@@ -281,16 +284,17 @@ def test_training_plans_and_navigation_share_the_followers_turn_limit(monkeypatc
 
     monkeypatch.setattr(planned, "feasible_worlds", planning)
     with pytest.raises(Planned):
-        planned.make_planned_env("confined-waypoints", num_worlds=2, plan_turn_accel=0.8)
+        planned.make_planned_env("confined-waypoints", num_worlds=2, plan_turn_accel=0.8, plan_face_travel=True)
     real_load = nav.load_follower
 
     def follower_with_turns(*args, **kwargs):
         policy, config = real_load(*args, **kwargs)
-        return policy, dataclasses.replace(config, env=dataclasses.replace(config.env, plan_turn_accel=0.7))
+        return policy, dataclasses.replace(config, env=dataclasses.replace(config.env, plan_turn_accel=0.7,
+                                                                           plan_face_travel=True))
 
     monkeypatch.setattr(nav, "load_follower", follower_with_turns)
     monkeypatch.setattr(nav, "plan_path", planning)
     world = generate_world(11, 0)
     with pytest.raises(Planned):
         nav.navigate_seeds(str(FOLLOWER.parent / "go1-confined-follower"), world, world.start, world.goal, [0])
-    assert [p.turn_accel for p in seen] == [0.8, 0.7]
+    assert [(p.turn_accel, p.face_travel) for p in seen] == [(0.8, True), (0.7, True)]

@@ -52,7 +52,8 @@ def _planner_config(args):
 
     config = PlannerConfig(planner=args.planner, time_limit=args.time_limit, seed=args.planner_seed,
                            spacing=args.spacing, space=args.space, max_checks=args.max_checks,
-                           crouch_speed=args.crouch_speed, turn_accel=args.turn_accel)
+                           crouch_speed=args.crouch_speed, turn_accel=args.turn_accel,
+                           face_travel=None if args.headings is None else args.headings == "travel")
     config.validate()
     return config
 
@@ -164,6 +165,10 @@ def _add_planner_options(parser) -> None:
                         help="largest sideways acceleration the plan asks for in its turns: where the path turns, the "
                              "speed limit is sqrt(this / curvature) (default: the follower's env.plan_turn_accel, "
                              "the limit its training plans had, if any)")
+    parser.add_argument("--headings", choices=["search", "travel"], default=None,
+                        help="search: the body headings of the search, which turns the body as little as it can; "
+                             "travel: each waypoint faces the way the path goes, where the body fits so (default: a "
+                             "follower's env.plan_face_travel, the headings its training plans had; else search)")
 
 
 SHIPPED_FOLLOWER = "assets/policies/go1-confined-follower"

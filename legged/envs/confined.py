@@ -116,6 +116,10 @@ class ConfinedConfig(EnvConfig):
     """Planned worlds: the planner's `turn_accel` for their plans, m/s^2 (a turn's waypoints carry the speed limit
     sqrt(turn_accel / curvature), so training meets the slower turns navigation asks for); navigation with such a
     follower plans with it too unless told otherwise. None: no limit of the plans' own."""
+    plan_face_travel: bool = False
+    """Planned worlds: the planner's `face_travel` for their plans (each waypoint turned to the direction the path
+    travels, where the body fits; planners.headings); navigation with such a follower plans so too. False: the
+    search's headings, which turn the body as little as they can (runs saved before it existed)."""
     spawn_yaw: float = 0.3
     """Initial heading is uniform in +-this, radians."""
     curriculum: bool = True

@@ -1,0 +1,72 @@
+"""Waypoint headings that face the way the body travels, where the body fits that way.
+
+The search spaces cost a turn of the body in metres of path (`PlannerConfig.angle_weight`) and nothing ties the
+body's heading to its direction of travel, so the cheapest path keeps one heading throughout: through a 90-degree
+turn the body walks half the path sideways, and a path that runs diagonally to the start-goal line is walked
+crabwise. A legged robot walks forward best. `face_travel` gives each waypoint the heading of the path through it
+(the direction from the waypoint before to the one after) wherever that pose has a feasible body height, roll and
+pitch and the motions to its neighbours pass the same check as the search's; elsewhere the searched heading stays.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+MIN_MOVE = 1e-3
+"""Horizontal travel (m) below which a waypoint has no direction of travel and keeps its searched heading."""
+
+
+def travel_headings(waypoints: np.ndarray) -> np.ndarray:
+    """Heading of the path through each waypoint (n, 6): from the waypoint before to the one after (the first and last
+    segments at the ends), radians; the waypoint's own heading where the path does not move horizontally."""
+    xy = np.asarray(waypoints, float)[:, :2]
+    if len(xy) < 2:
+        return np.asarray(waypoints, float)[:, 5].copy()
+    ahead = np.concatenate([xy[1:], xy[-1:]]) - np.concatenate([xy[:1], xy[:-1]])
+    moving = np.linalg.norm(ahead, axis=1) > MIN_MOVE
+    return np.where(moving, np.arctan2(ahead[:, 1], ahead[:, 0]), np.asarray(waypoints, float)[:, 5])
+
+
+def _segments_ok(space, vectors: np.ndarray, check_step: float) -> np.ndarray:
+    """Whether the straight motion between each pair of consecutive states passes the space's check (n - 1,)."""
+    lines, sizes = [], []
+    for a, b in zip(vectors[:-1], vectors[1:]):
+        n = max(int(math.ceil(np.linalg.norm(b - a) / check_step)), 1)
+        lines.append(a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a))
+        sizes.append(n + 1)
+    ok = space.valid(np.concatenate(lines))
+    bounds = np.cumsum([0] + sizes)
+    return np.array([ok[s:e].all() for s, e in zip(bounds[:-1], bounds[1:])])
+
+
+def face_travel(waypoints: np.ndarray, space, checker, check_step: float, keep_goal: bool) -> np.ndarray:
+    """`waypoints` (n, 6), a planned path whose consecutive motions are valid, with each waypoint after the start
+    turned to `travel_headings` where that pose and its motions to the neighbours are valid (height, roll and pitch
+    from `space`, a ProjectedSpace or the full space). The start keeps its pose, the goal too if `keep_goal`."""
+    out = np.array(waypoints, float)
+    n = len(out)
+    if n < 2:
+        return out
+    turned = out.copy()
+    turned[:, 5] = travel_headings(out)
+    vectors = np.stack([space.to_vector(p) for p in out])
+    turned_vectors = np.stack([space.to_vector(p) for p in turned])
+    if turned_vectors.shape[1] == 3:  # projected space: height, roll and pitch follow from x, y and heading
+        turned = space.to_poses(turned_vectors)  # (the full space keeps the planned height and tilt)
+    use = np.ones(n, bool)
+    use[0] = False
+    use[-1] &= not keep_goal
+    with np.errstate(invalid="ignore"):
+        use &= ~np.isnan(turned).any(axis=1)
+    use[use] = checker.valid(turned[use])
+    while use.any():  # a motion that fails gives its turned ends back their searched heading; the original path's pass
+        current = np.where(use[:, None], turned_vectors, vectors)
+        bad = np.flatnonzero(~_segments_ok(space, current, check_step))
+        if not use[bad].any() and not use[bad + 1].any():  # none left to give back
+            break
+        use[bad] = False
+        use[bad + 1] = False
+    out[use] = turned[use]
+    return out
