@@ -303,8 +303,8 @@ def plan_path(maps: HeightMaps, start, goal, robot: RobotSpec = GO1, config: Pla
     if not config.face_travel:
         return plan
     keep_goal = goal.shape == (6,)  # a full goal pose keeps its heading; a goal position takes the path's
-    return dataclasses.replace(plan, waypoints=face_travel(plan.waypoints, space, checker, config.check_step,
-                                                           keep_goal))
+    waypoints = face_travel(plan.waypoints, space, checker, config.check_step, keep_goal)
+    return dataclasses.replace(plan, waypoints=waypoints, speeds=_plan_speeds(waypoints, checker, config))
 
 
 def _ompl_plan(space, checker, start_pose, goal_pose, config: PlannerConfig, max_checks: int = 0) -> Plan:
