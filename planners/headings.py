@@ -10,9 +10,9 @@ pitch and the motions to its neighbours pass the same check as the search's; els
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
+
+from planners.lattice import _line
 
 MIN_MOVE = 1e-3
 """Horizontal travel (m) below which a waypoint has no direction of travel and keeps its searched heading."""
@@ -31,13 +31,9 @@ def travel_headings(waypoints: np.ndarray) -> np.ndarray:
 
 def _segments_ok(space, vectors: np.ndarray, check_step: float) -> np.ndarray:
     """Whether the straight motion between each pair of consecutive states passes the space's check (n - 1,)."""
-    lines, sizes = [], []
-    for a, b in zip(vectors[:-1], vectors[1:]):
-        n = max(int(math.ceil(np.linalg.norm(b - a) / check_step)), 1)
-        lines.append(a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a))
-        sizes.append(n + 1)
+    lines = [_line(a, b, check_step) for a, b in zip(vectors[:-1], vectors[1:])]
     ok = space.valid(np.concatenate(lines))
-    bounds = np.cumsum([0] + sizes)
+    bounds = np.cumsum([0] + [len(line) for line in lines])
     return np.array([ok[s:e].all() for s, e in zip(bounds[:-1], bounds[1:])])
 
 
