@@ -2,11 +2,12 @@
 
 A checkpoint saved while training holds, besides the networks, what only going on with that training needs: the
 optimiser's moments (Adam keeps two per weight, so they are twice the networks), a soccer run's pool of past
-selves its learner plays against, the terrain curriculum's levels and the random generator's state. A shipped
-policy is evaluated, watched, exported, averaged, distilled and fine-tuned from (`legged train TASK --init-from
-RUN` takes the actor and critic only), never resumed, so its checkpoint needs none of them: a soccer player's
-file shrinks from 12 MB to 2 MB. A slimmed checkpoint says so (`slimmed`), and `legged train --resume` refuses
-it in one line that names the way on (`--init-from`).
+selves its learner plays against and the random generator's state. A shipped policy is evaluated, watched,
+exported, averaged, distilled and fine-tuned from, never resumed, so its checkpoint needs none of them: a soccer
+player's file shrinks from 12 MB to 2 MB. What a fine-tune of the same task reads to go on where the run stood
+stays, as it is small: each environment's terrain-curriculum level and the learning rate the optimiser had
+reached (`learning_rate`; policies.warm_start). A slimmed checkpoint says so (`slimmed`), and `legged train
+--resume` refuses it in one line that names the way on (`--init-from`).
 """
 
 from __future__ import annotations
@@ -23,14 +24,20 @@ from policies.run_dir import RunDir, RunDirError
 TRAINING_STATE = ("optimizer_state_dict", "rnd_optimizer_state_dict")
 """Parts of an rsl-rl learner's state (`alg`) that only further training reads: its optimisers."""
 
-RESUME_ONLY = ("opponent_pool", "curriculum_levels", "randomization_scales", "torch_rng")
-"""Entries of an rsl checkpoint that only a resumed run reads (policies.rsl_backend.train_rsl)."""
+RESUME_ONLY = ("opponent_pool", "randomization_scales", "torch_rng")
+"""Entries of an rsl checkpoint that only a resumed run reads (policies.rsl_backend.train_rsl); its
+`curriculum_levels` stay for a fine-tune (policies.warm_start.source_levels)."""
 
 
 def slim_payload(payload: dict) -> dict:
-    """An rsl checkpoint's payload without what only resuming needs, marked `slimmed`."""
+    """An rsl checkpoint's payload without what only resuming needs, marked `slimmed`; the learning rate its
+    optimiser had reached is kept as `learning_rate` (a fine-tune of the same task starts its new optimiser there)."""
     alg = {k: v for k, v in payload["alg"].items() if k not in TRAINING_STATE}
-    return dict({k: v for k, v in payload.items() if k not in RESUME_ONLY}, alg=alg, slimmed=True)
+    slim = dict({k: v for k, v in payload.items() if k not in RESUME_ONLY}, alg=alg, slimmed=True)
+    optimiser = payload["alg"].get("optimizer_state_dict")
+    if optimiser and optimiser.get("param_groups"):
+        slim["learning_rate"] = float(optimiser["param_groups"][0]["lr"])
+    return slim
 
 
 def load_any(path: Path) -> dict:

@@ -31,9 +31,10 @@ ADAPT_SAMPLES = 1_000_000
 within the first few dozen iterations instead of staying the source's. From the same task the source's count stays
 (a new input's statistics are measured over a rollout, WARM_UP_STEPS)."""
 
-OPTIMISER_NOTE = {True: "its optimiser's moments and learning rate",
-                  False: "a new optimiser (the source's is missing or does not fit)"}
-"""How the note of a warm start from the same task names the optimiser it starts with."""
+OPTIMISER_NOTE = {"moments": "its optimiser's moments and learning rate",
+                  "rate": "a new optimiser at the learning rate the source had reached (a slimmed run keeps only that)",
+                  "new": "a new optimiser (the source's is missing or does not fit)"}
+"""How the note of a warm start from the same task names the optimiser it starts with (continue_optimiser)."""
 
 WARM_UP_STEPS = 100
 """Steps of every environment that a warm start from the same task rolls out, its policy acting, to measure the
@@ -94,19 +95,25 @@ def _rebuild(source: dict, target: dict, mapping: np.ndarray, fresh_mean: torch.
     return out
 
 
-def continue_optimiser(alg, saved: dict, columns: dict | None = None) -> bool:
+def continue_optimiser(alg, saved: dict, columns: dict | None = None, rate: float | None = None) -> str:
     """Load the source's optimiser state (`saved`: its checkpoint's "alg") into `alg`'s, so that a fine-tune of the same
     task updates as a resumed run would: Adam's moments, and with the adaptive schedule the learning rate it had
     reached (a fixed schedule keeps this run's). `columns` maps a first-layer weight (by id) rebuilt by layout to its
     source column per column (-1: a new input, whose moments start at zero). A new optimiser's first update, at the
     configured rate (1e-3 against the 5e-5 the source had settled at), threw a trained follower off: training falls
-    went from 20% to 50-75%. False, the optimiser left new, when the source has none (a slimmed run) or it does not
-    fit."""
+    went from 20% to 50-75%. Returns the OPTIMISER_NOTE key: "moments"; "rate" when the source kept only the rate
+    it had reached (`rate`, a slimmed checkpoint's `learning_rate`) and the schedule is adaptive: the new optimiser
+    starts there; "new", the optimiser left as it was, when the source has neither or its state does not fit."""
     source = saved.get("optimizer_state_dict")
     params = [p for group in alg.optimizer.param_groups for p in group["params"]]
     if source is None or [len(g["params"]) for g in source["param_groups"]] != [
             len(g["params"]) for g in alg.optimizer.param_groups]:
-        return False
+        if source is not None or rate is None or getattr(alg, "schedule", None) != "adaptive":
+            return "new"
+        alg.learning_rate = float(rate)
+        for group in alg.optimizer.param_groups:
+            group["lr"] = float(rate)
+        return "rate"
     columns = columns or {}
     state = {"param_groups": source["param_groups"], "state": {}}
     for i, entry in source["state"].items():
@@ -116,16 +123,16 @@ def continue_optimiser(alg, saved: dict, columns: dict | None = None) -> bool:
                 known, src = torch.as_tensor(mapping >= 0), torch.as_tensor(np.maximum(mapping, 0))
                 entry[key] = torch.where(known[None, :], entry[key][:, src], torch.zeros(()))
             if key in entry and entry[key].shape != params[i].shape:
-                return False
+                return "new"
         state["state"][i] = entry
-    rate = alg.learning_rate
+    configured = alg.learning_rate
     alg.optimizer.load_state_dict(state)
     if getattr(alg, "schedule", None) == "adaptive":
         alg.learning_rate = alg.optimizer.param_groups[0]["lr"]
     else:
         for group in alg.optimizer.param_groups:
-            group["lr"] = rate
-    return True
+            group["lr"] = configured
+    return "moments"
 
 
 def _first_weight(net) -> torch.nn.Parameter:
@@ -204,7 +211,7 @@ def same_task_start(alg, source: SourceRun, task: str) -> str | None:
             raise RunDirError(f"cannot warm start from {path}: its {key.split('_')[0]} does not fit this run's "
                               f"(use the source run's ppo.actor_hidden, ppo.critic_hidden and observations): "
                               f"{str(e).splitlines()[0]}") from None
-    optimiser = OPTIMISER_NOTE[continue_optimiser(alg, saved)]
+    optimiser = OPTIMISER_NOTE[continue_optimiser(alg, saved, rate=source.payload.get("learning_rate"))]
     return f"warm start from {path}: the same task, every weight and normaliser statistic as they were; {optimiser}"
 
 
@@ -268,5 +275,5 @@ def warm_start(alg, source: SourceRun | Path, env, obs, task: str = "", observe=
         report.append("the new inputs' statistics measured over a rollout")
     if keep:  # another task's optimiser state means nothing here
         columns = {id(_first_weight(net)): maps[group] for net, group, _ in nets}
-        report.append(OPTIMISER_NOTE[continue_optimiser(alg, saved, columns)])
+        report.append(OPTIMISER_NOTE[continue_optimiser(alg, saved, columns, source.payload.get("learning_rate"))])
     return f"warm start from {path}: " + "; ".join(report)

@@ -246,7 +246,8 @@ def test_a_fine_tune_of_the_same_task_goes_on_at_its_sources_curriculum_levels(t
 def test_a_same_task_warm_start_goes_on_with_its_sources_optimiser():
     """Adam's moments as the source left them (a first layer rebuilt by layout column by column, a new input's at
     zero) and, with the adaptive schedule, the learning rate it had reached; a fixed schedule keeps this run's rate;
-    no optimiser in the source (a slimmed run) or one of other shapes leaves the new one."""
+    no optimiser in the source or one of other shapes leaves the new one, unless the source (a slimmed run) kept the
+    rate it had reached: the new optimiser then starts there."""
     from policies.warm_start import continue_optimiser
 
     ppo = PPOConfig(actor_hidden=(16, 16), critic_hidden=(16, 16))
@@ -262,17 +263,24 @@ def test_a_same_task_warm_start_goes_on_with_its_sources_optimiser():
     new_obs = random_observations({"state": 7, "privileged_state": 6}, 8, 1)
 
     target = build_ppo(new_obs, 8, 3, ppo, "cpu")
-    assert continue_optimiser(target, saved, {id(first(target)): mapping}) and target.learning_rate == 5e-5
+    assert continue_optimiser(target, saved, {id(first(target)): mapping}) == "moments" and target.learning_rate == 5e-5
     moment, source_moment = (a.optimizer.state[first(a)]["exp_avg"] for a in (target, source))
     assert torch.equal(moment[:, [0, 1, 3, 4, 6]], source_moment) and torch.count_nonzero(moment[:, [2, 5]]) == 0
     last = [list(alg.critic.parameters())[-1] for alg in (target, source)]
     assert torch.equal(target.optimizer.state[last[0]]["exp_avg_sq"], source.optimizer.state[last[1]]["exp_avg_sq"])
 
     fixed = build_ppo(new_obs, 8, 3, dataclasses.replace(ppo, schedule="fixed", learning_rate=3e-4), "cpu")
-    assert continue_optimiser(fixed, saved, {id(first(fixed)): mapping})
+    assert continue_optimiser(fixed, saved, {id(first(fixed)): mapping}) == "moments"
     assert fixed.optimizer.param_groups[0]["lr"] == 3e-4
-    assert not continue_optimiser(build_ppo(new_obs, 8, 3, ppo, "cpu"), {}, {})
-    assert not continue_optimiser(build_ppo(src_obs, 8, 3, dataclasses.replace(ppo, actor_hidden=(8, 8)), "cpu"), saved)
+    assert continue_optimiser(build_ppo(new_obs, 8, 3, ppo, "cpu"), {}, {}) == "new"
+    assert continue_optimiser(build_ppo(src_obs, 8, 3, dataclasses.replace(ppo, actor_hidden=(8, 8)), "cpu"),
+                              saved) == "new"
+    # a slimmed source keeps only the rate it had reached: a new optimiser starts there (adaptive schedule only)
+    slimmed = build_ppo(new_obs, 8, 3, ppo, "cpu")
+    assert continue_optimiser(slimmed, {}, rate=5e-5) == "rate" and slimmed.learning_rate == 5e-5
+    assert slimmed.optimizer.param_groups[0]["lr"] == 5e-5 and not slimmed.optimizer.state
+    fixed = build_ppo(new_obs, 8, 3, dataclasses.replace(ppo, schedule="fixed", learning_rate=3e-4), "cpu")
+    assert continue_optimiser(fixed, {}, rate=5e-5) == "new" and fixed.optimizer.param_groups[0]["lr"] == 3e-4
 
 
 def test_warm_start_into_a_state_with_past_steps_acts_as_the_walker():

@@ -56,16 +56,20 @@ def test_a_slimmed_run_refuses_to_resume_and_names_init_from(tmp_path):
         training.resume_run(str(run), progress=False)
 
 
-def test_slimming_drops_what_only_resuming_reads():
+def test_slimming_drops_what_only_resuming_reads_and_keeps_what_a_fine_tune_goes_on_from():
     payload = {"backend": "rsl", "step": 7, "iteration": 1, "obs_sizes": {"state": 3}, "num_actions": 2,
-               "torch_rng": torch.zeros(4), "curriculum_levels": torch.zeros(2),
+               "torch_rng": torch.zeros(4), "curriculum_levels": torch.tensor([3, 1]),
                "opponent_pool": {"snapshots": [{"mean": torch.ones(3)}]},
                "alg": {"actor_state_dict": {"w": torch.ones(2)}, "critic_state_dict": {"w": torch.ones(1)},
-                       "optimizer_state_dict": {"state": {}}}}
+                       "optimizer_state_dict": {"state": {}, "param_groups": [{"lr": 7e-5, "params": [0, 1]}]}}}
     slim = slim_payload(payload)
-    assert set(slim) == {"backend", "step", "iteration", "obs_sizes", "num_actions", "alg", "slimmed"}
+    assert set(slim) == {"backend", "step", "iteration", "obs_sizes", "num_actions", "alg", "slimmed",
+                         "curriculum_levels", "learning_rate"}
     assert set(slim["alg"]) == {"actor_state_dict", "critic_state_dict"}
+    assert slim["learning_rate"] == 7e-5 and slim["curriculum_levels"].tolist() == [3, 1]
     assert "optimizer_state_dict" in payload["alg"]  # the source is left as it was
+    again = slim_payload(slim)  # a slimmed payload (e.g. in a mean of checkpoints) keeps them
+    assert again["learning_rate"] == 7e-5 and again["curriculum_levels"].tolist() == [3, 1]
 
 
 def test_the_mean_of_a_slimmed_and_a_full_checkpoint_is_slimmed(tmp_path):
