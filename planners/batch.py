@@ -26,7 +26,7 @@ from legged.worlds.levels import LevelConfig, make_world
 from planners.body_planner import Plan, PlannerConfig, PlanningError, plan_path
 from legged.worlds.maps import HeightMaps
 
-CACHE_VERSION = 2
+CACHE_VERSION = 3
 """Bump when the planner's output for the same inputs changes, so stale cache entries are not used."""
 
 

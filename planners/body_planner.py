@@ -108,6 +108,9 @@ class PlannerConfig:
     """True: turn each waypoint after the start to the direction the path travels through it, where the body fits
     that way (planners.headings); False: the search's headings, which turn the body as little as they can; None: as
     False, unless navigation sets a follower's own choice (planners.follower_planner)."""
+    travel_window: float = 1.5
+    """With `face_travel`, the length of path (m) whose direction a waypoint faces, centred on it: a few body lengths,
+    so a turn is faced gradually and a short sidestep is walked sideways (planners.headings.travel_headings)."""
     space: str = "projected"
     """projected: search x, y, yaw, with height, roll and pitch put in the middle of the feasible band
     (planners.pose_band; narrow height bands cost nothing); full: sample all six (the earlier planner)."""
@@ -117,7 +120,8 @@ class PlannerConfig:
         planner_key(self.planner)
         if self.space not in ("projected", "full"):
             raise PlanningError(f"space must be 'projected' or 'full', got {self.space!r}")
-        for name in ("time_limit", "quick_checks", "spacing", "angle_weight", "max_step", "check_step"):
+        for name in ("time_limit", "quick_checks", "spacing", "angle_weight", "max_step", "check_step",
+                     "travel_window"):
             if getattr(self, name) <= 0:
                 raise PlanningError(f"{name} must be > 0, got {getattr(self, name)}")
         if self.crouch_speed is not None and not 0 < self.crouch_speed < math.inf:
@@ -303,7 +307,7 @@ def plan_path(maps: HeightMaps, start, goal, robot: RobotSpec = GO1, config: Pla
     if not config.face_travel:
         return plan
     keep_goal = goal.shape == (6,)  # a full goal pose keeps its heading; a goal position takes the path's
-    waypoints = face_travel(plan.waypoints, space, checker, config.check_step, keep_goal)
+    waypoints = face_travel(plan.waypoints, space, checker, config.check_step, keep_goal, config.travel_window)
     return dataclasses.replace(plan, waypoints=waypoints, speeds=_plan_speeds(waypoints, checker, config))
 
 
