@@ -106,8 +106,8 @@ class PlannerConfig:
     own)."""
     face_travel: bool | None = None
     """True: turn each waypoint after the start to the direction the path travels around it (over `travel_window`),
-    where the body fits that way (planners.headings); False: the search's headings, which turn the body as little as they can; None: as
-    False, unless navigation sets a follower's own choice (planners.follower_planner)."""
+    where the body fits that way (planners.headings); False: the search's headings, which turn the body as little as
+    they can; None: as False, unless navigation sets a follower's own choice (planners.follower_planner)."""
     travel_window: float = 1.5
     """With `face_travel`, the length of path (m) whose direction a waypoint faces, centred on it: a few body lengths,
     so a turn is faced gradually and a short sidestep is walked sideways (planners.headings.travel_headings)."""
