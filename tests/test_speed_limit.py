@@ -1,7 +1,7 @@
 """The confined tasks' speed limit: exploration pays no speed beyond it, `overspeed` charges for the excess, a
 planned path may lower it at its waypoints, and a policy trained with `speed_command` is told the limit in force (and,
 with `preview`, the waypoint after the current one).
-Runs saved before the limit existed load with their old observations. A robot that stands still too long ends its
+An opt-in roll/pitch-rate cost charges tipping. Runs saved before the limit existed load with their old observations. A robot that stands still too long ends its
 training episode (`stall_timeout_s`), never an evaluation's, and navigation runs the robot model as it is when asked.
 
 The task's hooks are called directly on a spawned episode (no physics, nothing compiled): the file takes seconds.
@@ -68,6 +68,18 @@ def test_exploration_is_capped_at_the_limit_and_overspeed_is_charged(terrain):
     assert slow["exploration"] == pytest.approx(w.exploration * 0.5, rel=1e-4)
     assert slow["overspeed"] == 0.0 and slow_metrics["overspeed_mps"] == 0.0
     assert slow_metrics["mean_speed_mps"] == pytest.approx(0.5, rel=1e-4)
+
+
+def test_the_roll_and_pitch_rate_cost_is_opt_in_and_ignores_yaw(terrain):
+    view, info = _moving(_env(terrain), 0.5)
+    view = view.replace(qvel=view.qvel.at[3:6].set(jnp.array([2.0, -1.0, 5.0])))  # body-frame roll, pitch, yaw rates
+    rewards = dataclasses.replace(ConfinedConfig().rewards, ang_vel_xy=-0.05)
+    for env, expected in ((_env(terrain), None), (_env(terrain, rewards=rewards), -0.05 * (4.0 + 1.0))):
+        terms = env._task_step(view, info, jnp.zeros(env.action_size))[0]
+        if expected is None:
+            assert "ang_vel_xy" not in terms
+        else:
+            assert float(terms["ang_vel_xy"]) == pytest.approx(expected, rel=1e-5)
 
 
 def test_a_waypoint_limit_lowers_the_limit_in_force_and_the_command_tells_it(terrain):

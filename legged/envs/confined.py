@@ -57,6 +57,9 @@ class ConfinedRewards:
     """exp(-(w_cmd - w)^2 / 0.25) in velocity and skills modes."""
     tracking_pose: float = 1.0
     """exp(-(height, roll, pitch error)^2 / 0.02) in skills mode."""
+    ang_vel_xy: float = 0.0
+    """Times the sum of the squared roll and pitch rates of the body (rad/s, body frame; the walkers' -0.05): a cost
+    of tipping fast, which is how followers fall (flips). 0, no term: runs saved before it existed."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -328,6 +331,8 @@ class ConfinedEnv(LeggedEnv):
             "stalling": w.stalling * stalling,
             "overspeed": w.overspeed * overspeed,
         }
+        if w.ang_vel_xy:
+            terms["ang_vel_xy"] = w.ang_vel_xy * jnp.sum(jnp.square(data.qvel[3:5]))
         if cfg.mode in ("waypoints", "goal"):
             toward = jnp.dot(vel[:2], to_target / jnp.maximum(dist, 1e-6))
             terms["exploration"] = w.exploration * jnp.minimum(toward, limit)
