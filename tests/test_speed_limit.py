@@ -1,7 +1,7 @@
 """The confined tasks' speed limit: exploration pays no speed beyond it, `overspeed` charges for the excess, a
 planned path may lower it at its waypoints, and a policy trained with `speed_command` is told the limit in force (and,
-with `preview`, the waypoint after the current one).
-An opt-in roll/pitch-rate cost charges tipping. Runs saved before the limit existed load with their old observations. A robot that stands still too long ends its
+with `preview`, the waypoint after the current one); an opt-in roll/pitch-rate cost charges tipping.
+Runs saved before the limit existed load with their old observations. A robot that stands still too long ends its
 training episode (`stall_timeout_s`), never an evaluation's, and navigation runs the robot model as it is when asked.
 
 The task's hooks are called directly on a spawned episode (no physics, nothing compiled): the file takes seconds.
