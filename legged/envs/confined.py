@@ -22,7 +22,7 @@ from legged.envs.config import GO1_RANDOMIZATION, EnvConfig, NoiseConfig, Penalt
 from legged.envs.curriculum import next_level, pick_tile
 from legged.envs.math import roll_pitch, yaw_rotate
 from legged.envs.paths import pad_paths, pad_speeds, straight_path
-from legged.envs.rewards import tracking, wrap_angle
+from legged.envs.rewards import roll_pitch_rate_sq, tracking, wrap_angle
 from legged.robots import GO1
 from legged.robots.spec import RobotSpec
 from legged.sensors.heightscan import ScanConfig, scan_points_world
@@ -332,7 +332,7 @@ class ConfinedEnv(LeggedEnv):
             "overspeed": w.overspeed * overspeed,
         }
         if w.ang_vel_xy:
-            terms["ang_vel_xy"] = w.ang_vel_xy * jnp.sum(jnp.square(data.qvel[3:5]))
+            terms["ang_vel_xy"] = w.ang_vel_xy * roll_pitch_rate_sq(data.qvel)
         if cfg.mode in ("waypoints", "goal"):
             toward = jnp.dot(vel[:2], to_target / jnp.maximum(dist, 1e-6))
             terms["exploration"] = w.exploration * jnp.minimum(toward, limit)

@@ -10,7 +10,7 @@ import jax.numpy as jnp
 from legged.envs.base import LeggedEnv
 from legged.envs.config import GO1_RANDOMIZATION, EnvConfig, NoiseConfig, PenaltyScales, RandomizationConfig
 from legged.envs.math import yaw_rotate
-from legged.envs.rewards import tracking
+from legged.envs.rewards import roll_pitch_rate_sq, tracking
 from legged.robots import GO1
 from legged.robots.spec import RobotSpec
 from legged.worlds.mjcf import SceneOptions
@@ -114,7 +114,7 @@ class VelocityTrackingEnv(LeggedEnv):
             "tracking_lin_vel": w.tracking_lin_vel * tracking(jnp.sum(jnp.square(cmd[:2] - local)), w.tracking_sigma),
             "tracking_yaw_rate": w.tracking_yaw_rate * tracking(jnp.square(cmd[2] - ang[2]), w.tracking_sigma),
             "lin_vel_z": w.lin_vel_z * jnp.square(data.qvel[2]),
-            "ang_vel_xy": w.ang_vel_xy * jnp.sum(jnp.square(data.qvel[3:5])),
+            "ang_vel_xy": w.ang_vel_xy * roll_pitch_rate_sq(data.qvel),
             "feet_air_time": w.feet_air_time * moving * jnp.sum((air - w.feet_air_threshold) * touchdown),
         }
         metrics = {"command_speed": jnp.linalg.norm(cmd[:2]), "speed": jnp.linalg.norm(local),

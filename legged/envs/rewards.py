@@ -8,6 +8,12 @@ def tracking(error_sq, sigma):
     return jnp.exp(-error_sq / sigma)
 
 
+def roll_pitch_rate_sq(qvel):
+    """Sum of the squared roll and pitch rates of a free-floating base (rad/s, body frame: qvel[3:5] of its free
+    joint), the tipping that the walkers' and the confined tasks' `ang_vel_xy` terms charge."""
+    return jnp.sum(jnp.square(qvel[3:5]))
+
+
 def penalty_terms(scales, q, q_range, qd, last_qvel, dt, torque, action, last_action, collisions) -> dict:
     """The penalty terms every task shares (weights from a PenaltyScales `scales`).
 
