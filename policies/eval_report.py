@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 
+from legged.robots.models import model_path
 from legged.tasks import task_entry
 from legged.worlds.levels import LEVELS
 from policies.environments import build_env, soccer_opponent
@@ -12,6 +13,7 @@ from policies.evaluate import (HELD_OUT_SEED_OFFSET, confined_eval_config, evalu
                                nominal_config, on_robot, ood_config, paired_goal_ratio, robot_ratios,
                                state_player_game, summarize)
 from policies.policy_io import load_policy
+from policies.provenance import checkpoint_record, frozen_runs, repo_path, sealed
 from policies.run_dir import RunDir, check_policy
 
 
@@ -73,7 +75,7 @@ def evaluation_report(request: EvalRequest) -> dict:
         pilot = {"teacher": config.distill.teacher, "none": ""}.get(request.pilot, request.pilot)
         config = dataclasses.replace(config, soccer=dataclasses.replace(config.soccer, pilot=pilot)).resolved()
     configs = {r: on_robot(config, r) for r in robots}
-    report = dict(physics=request.physics, seed=request.seed, checkpoint=str(policy.checkpoint),
+    report = dict(physics=request.physics, seed=request.seed, checkpoint=repo_path(policy.checkpoint),
                   trained_steps=policy.step, task=config.task)
     if request.ood:
         report["ood"] = True
@@ -84,7 +86,11 @@ def evaluation_report(request: EvalRequest) -> dict:
         report["ratios"] = robot_ratios(report["robots"], robots[0])
     else:
         report.update(_evaluate_run(request, configs[request.robot], policy), robot=request.robot)
-    return report
+    others = {"opponent": request.opponent, "teammate": request.teammate,
+              "teacher": config.distill.teacher if request.compare_teacher else None}
+    spec = task_entry(config.task).robot
+    return sealed(report, dict(policy=checkpoint_record(policy), **frozen_runs(config, **others)),
+                  {r: model_path(spec, r) or spec.mjcf_path for r in robots})
 
 
 def check_request(request: EvalRequest, config) -> list[str]:
@@ -208,7 +214,8 @@ def _in_the_same_games(request: EvalRequest, state_run: str, finals: list[dict],
                              request.threads, progress=request.progress,
                              env_args=_other_players(request, env, player))
     summary = summarize(player_finals, False)
-    keep = ("goals_for_per_episode", "goals_against_per_episode", "win_rate", "fall_rate")
-    return {role: dict({k: summary[k] for k in keep}, run=state_run, checkpoint=str(player.checkpoint)),
+    keep = ("goals_for_per_episode", "goals_against_per_episode", "win_rate", "falls_per_episode",
+            "episodes_with_a_fall")
+    return {role: dict({k: summary[k] for k in keep}, run=state_run, checkpoint=repo_path(player.checkpoint)),
             f"goals_vs_{role}": paired_goal_ratio([f["goals_for"] for f in finals],
                                                  [f["goals_for"] for f in player_finals])}

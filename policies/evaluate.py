@@ -81,7 +81,7 @@ def on_robot(config, robot: str, physics: str | None = None):
     return dataclasses.replace(config, env=dataclasses.replace(config.env, robot_model=robot, randomization=own))
 
 
-RATIO_FIGURES = ("tracking_error_mps", "fall_rate", "episode_return", "goals_for_per_episode",
+RATIO_FIGURES = ("tracking_error_mps", "falls_per_episode", "episodes_with_a_fall", "episode_return", "goals_for_per_episode",
                  "goals_against_per_episode", "win_rate", "success_rate", "time_to_goal_s", "collisions_per_episode")
 """The figures `legged eval --compare-robots` gives as ratios to the first robot model's."""
 
@@ -117,6 +117,23 @@ def estimate_errors(finals: list[dict]) -> dict:
     return out
 
 
+def fall_figures(finals: list[dict]) -> dict:
+    """Falls counted as they happened (legged.envs.events) over finished episodes: `falls` (all of them),
+    `falls_per_episode`, `episodes_with_a_fall` (the share with at least one), `seconds_down_per_episode`, and where
+    the player has a get-up skill `getups_started_per_episode` and `getups_completed_per_episode`; {} for
+    episodes without fall counts."""
+    if "events/falls" not in finals[0]:
+        return {}
+    falls = np.array([f["events/falls"] for f in finals])
+    out = {"falls": int(round(falls.sum())), "falls_per_episode": float(falls.mean()),
+           "episodes_with_a_fall": float(np.mean(falls > 0)),
+           "seconds_down_per_episode": float(np.mean([f["events/seconds_down"] for f in finals]))}
+    if "events/getups_started" in finals[0]:
+        for kind in ("started", "completed"):
+            out[f"getups_{kind}_per_episode"] = float(np.mean([f[f"events/getups_{kind}"] for f in finals]))
+    return out
+
+
 def summarize(finals: list[dict], confined: bool) -> dict:
     """Task metrics over finished episodes (`finals`: each episode's statistics at its last step)."""
     out = {"episodes": len(finals), "episode_return": float(np.mean([f["return"] for f in finals])),
@@ -125,8 +142,7 @@ def summarize(finals: list[dict], confined: bool) -> dict:
     out["reward_terms"] = {k[7:]: float(np.mean([f[k] for f in finals])) for k in terms}
     if "elliptic_cone" in finals[0]:  # the share of robots that drew elliptic friction cones
         out["elliptic_cone_share"] = float(np.mean([f["elliptic_cone"] for f in finals]))
-    if "fell" in finals[0]:
-        out["fall_rate"] = float(np.mean([f["fell"] > 0 for f in finals]))
+    out.update(fall_figures(finals))
     if "tracking_error_mps" in finals[0]:  # velocity tracking: mean |commanded - actual| planar base velocity
         out["tracking_error_mps"] = float(np.mean([f["tracking_error_mps"] for f in finals]))
     if "goals_for" in finals[0]:  # soccer, from the learner's side against the evaluation opponent

@@ -12,7 +12,7 @@ from policies.eval_report import EvalRequest, evaluation_report
 from policies.plots import line_plot
 from policies.run_dir import RunDir, checkpoint_step
 
-FIGURES = ("tracking_error_mps", "fall_rate", "episode_return", "success_rate")
+FIGURES = ("tracking_error_mps", "episodes_with_a_fall", "episode_return", "success_rate")
 """Figures of an evaluation report a curve keeps (those the task reports)."""
 
 

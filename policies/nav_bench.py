@@ -17,7 +17,9 @@ from tqdm import tqdm
 from legged.worlds.scenes import SPEED, read_scene, scene_files
 from planners import PlannerConfig, follower_planner, navigation_maps
 from policies.evaluate import wilson_interval
-from policies.navigate import NavigationError, Unreachable, check_speed_limit, load_follower, navigate_seeds
+from policies.navigate import (NavigationError, Unreachable, check_speed_limit, follower_provenance, load_follower,
+                               navigate_seeds)
+from policies.provenance import repo_path, sealed
 
 
 def _median(values: list) -> float | None:
@@ -37,14 +39,14 @@ def scene_row(scene, reports: list[dict], speed: float) -> dict:
             "time_vs_path_at_speed": _median(at_limit),
             "mean_speed_mps": round(float(speeds.mean()), 3) if len(speeds) else 0.0,
             "p95_speed_mps": round(float(np.percentile(speeds, 95)), 3) if len(speeds) else 0.0,
-            "collisions": mean("collisions"), "falls": mean("fell"), "replans": mean("replans"),
+            "collisions": mean("collisions"), "falls_per_episode": mean("falls"), "replans": mean("replans"),
             "plan_time_s": reports[0]["plan_time_s"], "outcomes": [_outcome(r) for r in reports]}
 
 
 def _outcome(report: dict) -> str:
     if report["success"]:
         return "goal"
-    return "fell" if report["fell"] else "timeout"
+    return "fell" if report["falls"] else "timeout"
 
 
 def _unplanned(scene, episodes: int, why: str) -> dict:
@@ -52,7 +54,8 @@ def _unplanned(scene, episodes: int, why: str) -> dict:
     return {"scene": scene.name, "description": scene.description, "episodes": episodes, "successes": 0,
             "success_rate": 0.0, "time_limit_s": scene.time_limit_s, "path_length_m": None, "time_to_goal_s": None,
             "time_vs_path_at_speed": None, "mean_speed_mps": 0.0, "p95_speed_mps": 0.0, "collisions": 0.0,
-            "falls": 0.0, "replans": 0.0, "plan_time_s": None, "outcomes": ["unplanned"] * episodes, "error": why}
+            "falls_per_episode": 0.0, "replans": 0.0, "plan_time_s": None, "outcomes": ["unplanned"] * episodes,
+            "error": why}
 
 
 def bench_navigate(scenes_dir, policy_dir, seeds: int = 5, first_seed: int = 0, robot: str = "project",
@@ -89,7 +92,7 @@ def bench_navigate(scenes_dir, policy_dir, seeds: int = 5, first_seed: int = 0, 
     bar.close()
     episodes, wins = sum(r["episodes"] for r in rows), sum(r["successes"] for r in rows)
     ratios = [r["time_vs_path_at_speed"] for r in rows if r["time_vs_path_at_speed"] is not None]
-    return {"scenes_dir": str(scenes_dir), "policy": str(policy_dir), "robot": robot, "physics": physics,
+    return sealed({"scenes_dir": repo_path(scenes_dir), "policy": repo_path(policy_dir), "robot": robot, "physics": physics,
             "seeds": list(range(first_seed, first_seed + seeds)), "speed_limit_mps": speed,
             "planner": dataclasses.asdict(follower_planner(run_config.env, planner)),
             "total": {"scenes": len(rows), "episodes": episodes, "successes": wins,
@@ -97,7 +100,7 @@ def bench_navigate(scenes_dir, policy_dir, seeds: int = 5, first_seed: int = 0, 
                       "worst_scene_success": min(r["success_rate"] for r in rows),
                       "median_time_vs_path_at_speed": _median(ratios),
                       "p95_speed_mps": round(float(np.percentile(pooled, 95)), 3) if pooled else 0.0},
-            "scenes": rows}
+            "scenes": rows}, *follower_provenance(policy_dir, robot))
 
 
 def print_table(report: dict) -> None:
@@ -108,7 +111,7 @@ def print_table(report: dict) -> None:
         fmt = lambda v, f: format(v, f) if v is not None else "-"
         print(f"{r['scene']:>22} {r['successes']:>3}/{r['episodes']:<4} {fmt(r['time_to_goal_s'], '9.2f')} "
               f"{fmt(r['time_vs_path_at_speed'], '7.2f')} {r['mean_speed_mps']:8.2f} {r['p95_speed_mps']:8.2f} "
-              f"{r['collisions']:5.1f} {r['falls']:5.2f} {r['replans']:7.1f}")
+              f"{r['collisions']:5.1f} {r['falls_per_episode']:5.2f} {r['replans']:7.1f}")
     t = report["total"]
     lo, hi = t["success_interval_95"]
     print(f"total: {t['successes']}/{t['episodes']} ({t['success_rate']:.0%}, 95% interval {lo:.0%}-{hi:.0%}); "

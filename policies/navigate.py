@@ -20,6 +20,7 @@ from legged.envs.confined import ConfinedEnv
 from legged.envs.curriculum import level_carry
 from legged.envs.paths import pad_speeds
 from legged.envs.vector import VectorEnv
+from legged.robots.models import model_path
 from legged.tasks import task_entry
 from legged.worlds.maps import HeightMaps
 from legged.worlds.terrain import Terrain
@@ -28,6 +29,7 @@ from planners.body_planner import PlannerConfig, PlanningError, plan_path, repla
 from planners.planned_env import follower_planner
 from policies.evaluate import nominal_config, on_robot, whole_episodes
 from policies.policy_io import actor_observation, load_policy
+from policies.provenance import repo_path, run_record, sealed
 from policies.run_dir import RunDir, RunDirError, check_policy
 
 PATH_CAPACITY = 256
@@ -105,8 +107,9 @@ def load_follower(run_dir, robot: str = "project", physics: str | None = None):
 def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", threads: int | None = None,
              config: NavigateConfig = NavigateConfig(), planner: PlannerConfig = PlannerConfig(), seed: int = 0,
              on_step=None, robot: str = "project", time_limit_s: float | None = None,
-             max_speed: float | None = None, nominal: bool = False) -> dict:
-    """Plan from start to goal, follow with the run's policy, replan on straying; the outcome as a dict.
+             max_speed: float | None = None, nominal: bool = False, where: dict | None = None) -> dict:
+    """Plan from start to goal, follow with the run's policy, replan on straying; the outcome as a dict (after the
+    fields of `where`, which say what was navigated), with its provenance (policies.provenance).
     `on_step(env, state, plan)` is called at the start and after every control step but the last (viewers). Raises NavigationError (the
     policy cannot navigate, or the start or goal is unusable; Unreachable when no path exists) before any
     compilation. `robot`: the robot model the follower walks (legged.robots.models). `time_limit_s`: the
@@ -118,7 +121,13 @@ def navigate(run_dir, maps: HeightMaps, start, goal, physics: str = "native", th
     report = navigate_seeds(run_dir, maps, start, goal, [seed], physics, threads, config, planner, on_step, robot,
                             time_limit_s, max_speed=max_speed, nominal=nominal)[0]
     report.pop("speeds_mps")
-    return report
+    return sealed(dict(where or {}, **report), *follower_provenance(run_dir, robot))
+
+
+def follower_provenance(run_dir, robot: str = "project") -> tuple[dict, dict]:
+    """(the follower's `run_record` as the policy, the robot model file) for a navigation report's provenance."""
+    spec = task_entry(RunDir(run_dir).load_config().task).robot
+    return {"policy": run_record(run_dir)}, {robot: model_path(spec, robot) or spec.mjcf_path}
 
 
 def episode_config(env_config, **changes):
@@ -162,7 +171,7 @@ def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], phy
     reports = []
     for seed in seeds:
         report = _follow(vector, env, policy, checker, goal, spec, first_plan, seed, config, planner, on_step)
-        reports.append(dict(report, physics=physics, time_limit_s=round(time_limit, 2), policy=str(policy.checkpoint),
+        reports.append(dict(report, physics=physics, time_limit_s=round(time_limit, 2), policy=repo_path(policy.checkpoint),
                             robot=run_config.env.robot_model,
                             speed_limit_mps=None if math.isinf(limit) else limit,
                             speed_commanded=env_config.speed_command))
@@ -214,7 +223,7 @@ def _follow(vector, env, policy, checker, goal, spec, first_plan, seed, config, 
     success = final["success"] > 0
     return {"success": bool(success), "time_s": round(steps * env.dt, 3),
             "time_to_goal_s": round(final["time_to_goal_s"], 3) if success else None,
-            "collisions": int(final["collisions"]), "fell": bool(final["fell"] > 0), "replans": replans,
+            "collisions": int(final["collisions"]), "falls": int(final["events/falls"]), "replans": replans,
             "failed_replans": failed_replans, "path_length_m": round(first_plan.length_m, 4),
             "walked_m": round(walked, 4), "mean_speed_mps": round(float(np.mean(speeds)), 4) if speeds else 0.0,
             "p95_speed_mps": round(float(np.percentile(speeds, 95)), 4) if speeds else 0.0,

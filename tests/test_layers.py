@@ -181,7 +181,7 @@ POLICIES_ORDER = [
     ("models", ("policies.algorithms", "policies.latent_models", "policies.memory_models", "policies.hib",
                 "policies.teacher_kl", "policies.students", "policies.warm_start", "policies.probe",
                 "policies.soccer.selfplay", "policies.brax_networks")),
-    ("policy loading", ("policies.policy_io",)),
+    ("policy loading", ("policies.policy_io", "policies.provenance")),
     ("environments", ("policies.environments", "policies.rsl_vecenv", "policies.training_hooks",
                       "policies.soccer.steered", "policies.soccer.hooks")),
     ("backends", ("policies.rsl_backend", "policies.brax_backend")),
@@ -193,8 +193,8 @@ POLICIES_ORDER = [
 """The groups of `policies`, lowest first, as LEGGED_ORDER: run files (config I/O, configs, the soccer section of
 the config, the tasks' recipes, run directories, the process launch) < checkpoints (the data-only formats, their weights-only form) <
 models (networks, the HIB and teacher-KL losses, the students' distillation losses and starts, warm starts, the
-linear probe, self-play snapshots) < policy loading < the environments runs train and play in (a pilot's steered game
-among them) and the hooks through which a task family adds to the training loop < trainer backends < orchestration
+linear probe, self-play snapshots) < policy loading (and the provenance of results) < the environments runs train
+and play in (a pilot's steered game among them) and the hooks through which a task family adds to the training loop < trainer backends < orchestration
 (the commands: train, distill, evaluate, drill, navigate, export, convert, average, tables and plots). The
 soccer-only modules (policies.soccer) sit in the groups of their jobs: the subpackage and its config with the run
 files (policies.config imports the config), selfplay with the models, steered and the training hooks with the

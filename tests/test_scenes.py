@@ -90,12 +90,12 @@ def test_a_scene_row_pools_speeds_and_times_at_the_limit():
     from policies.nav_bench import scene_row
 
     scene = build()[0]
-    report = lambda ok, t, speeds, fell=False: {
+    report = lambda ok, t, speeds, falls=0: {
         "success": ok, "time_to_goal_s": t if ok else None, "path_length_m": 5.0, "speeds_mps": np.asarray(speeds),
-        "collisions": 1, "fell": fell, "replans": 2, "plan_time_s": 0.1}
+        "collisions": 1, "falls": falls, "replans": 2, "plan_time_s": 0.1}
     row = scene_row(scene, [report(True, 6.0, [1.0] * 19 + [2.0]), report(True, 10.0, [0.5] * 20),
-                            report(False, None, [0.0] * 20, fell=True)], speed=1.0)
+                            report(False, None, [0.0] * 20, falls=1)], speed=1.0)
     assert (row["successes"], row["episodes"], row["outcomes"]) == (2, 3, ["goal", "goal", "fell"])
     assert row["time_to_goal_s"] == 8.0 and row["time_vs_path_at_speed"] == pytest.approx(1.6)  # 8 s for 5 m at 1 m/s
     assert row["mean_speed_mps"] == pytest.approx((19 + 2 + 10) / 60, abs=1e-3)
-    assert row["p95_speed_mps"] == pytest.approx(1.0) and row["falls"] == pytest.approx(1 / 3, abs=1e-3)
+    assert row["p95_speed_mps"] == pytest.approx(1.0) and row["falls_per_episode"] == pytest.approx(1 / 3, abs=1e-3)

@@ -122,10 +122,12 @@ def test_soccer_configs_fail_before_any_work():
 
 
 def test_soccer_evaluation_figures():
-    finals = [{"return": 1.0, "length": 10, "goals_for": 2.0, "goals_against": 1.0, "fell": 0.0, "reward/goal": 1.0},
-              {"return": -1.0, "length": 4, "goals_for": 0.0, "goals_against": 0.0, "fell": 1.0, "reward/goal": 0.0}]
-    report = summarize(finals, confined=False)
-    assert report["win_rate"] == 0.5 and report["fall_rate"] == 0.5
+    events = lambda falls: {"events/falls": falls, "events/seconds_down": 0.5 * falls, "fell": 0.0}
+    finals = [{"return": 1.0, "length": 10, "goals_for": 2.0, "goals_against": 1.0, "reward/goal": 1.0, **events(0.0)},
+              {"return": -1.0, "length": 4, "goals_for": 0.0, "goals_against": 0.0, "reward/goal": 0.0, **events(3.0)}]
+    report = summarize(finals, confined=False)  # the second fell 3 times, got up and stood at the end
+    assert report["win_rate"] == 0.5 and report["episodes_with_a_fall"] == 0.5 and report["falls"] == 3
+    assert report["falls_per_episode"] == 1.5 and report["seconds_down_per_episode"] == 0.75
     assert report["goals_for_per_episode"] == 1.0 and report["goals_against_per_episode"] == 0.5
 
 

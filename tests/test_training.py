@@ -150,7 +150,7 @@ def test_eval_is_deterministic_and_onnx_matches(trained_run, tiny_env, tmp_path)
     assert first == again
     report = summarize(first, confined=False)
     assert report["episodes"] == BATCH and report["episode_length_steps"] == 10.0
-    assert 0.0 <= report["tracking_error_mps"] and report["fall_rate"] == 0.0
+    assert 0.0 <= report["tracking_error_mps"] and report["falls"] == 0
     halves = evaluate(tiny_env, policy, episodes=BATCH, seed=3, physics="native", num_envs=BATCH // 2, progress=False)
     assert len(halves) == BATCH and all(f["length"] == 10.0 for f in halves)  # two rounds, every episode whole
     export = export_onnx(policy, tmp_path / "policy.onnx")
@@ -412,7 +412,7 @@ def test_a_learning_curve_plots_held_out_figures_against_time_from_process_start
     report = json.loads(capsys.readouterr().out)
     points = report["curves"][0]["points"]
     assert [p["step"] for p in points] == [40, 120] and points[0]["wall_s"] < points[1]["wall_s"]
-    assert all(p["tracking_error_mps"] >= 0 and p["fall_rate"] == 0.0 for p in points)
+    assert all(p["tracking_error_mps"] >= 0 and p["episodes_with_a_fall"] == 0.0 for p in points)
     assert out.stat().st_size > 1000 and report["plot"] == str(out)
     empty = RunDir(tmp_path / "empty")
     empty.create(TrainConfig(task="go1-flat").resolved())
@@ -432,14 +432,14 @@ def test_table_puts_saved_evaluations_side_by_side(tmp_path, capsys):
     for name, ret, ood in (("teacher", 1234.5, 900.0), ("hib", 1100.25, 950.0)):
         (tmp_path / name).mkdir()
         for file, value in (("eval_native.json", ret), ("eval_ood_native.json", ood)):
-            (tmp_path / name / file).write_text(json.dumps({"episode_return": value, "fall_rate": 0.02,
+            (tmp_path / name / file).write_text(json.dumps({"episode_return": value, "episodes_with_a_fall": 0.02,
                                                             "trained_steps": 40_000_000}))
     runs = [str(tmp_path / "teacher"), str(tmp_path / "hib")]
     assert main(["table", *runs, "--files", "eval_native.json,eval_ood_native.json",
-                 "--metrics", "episode_return,fall_rate"]) == 0
+                 "--metrics", "episode_return,episodes_with_a_fall"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0] == ("| run | steps | episode_return (eval_native) | fall_rate (eval_native) | "
-                        "episode_return (eval_ood_native) | fall_rate (eval_ood_native) |")
+    assert lines[0] == ("| run | steps | episode_return (eval_native) | episodes_with_a_fall (eval_native) | "
+                        "episode_return (eval_ood_native) | episodes_with_a_fall (eval_ood_native) |")
     assert lines[2] == "| teacher | 40,000,000 | 1,234 | 0.02 | 900 | 0.02 |"
     assert lines[3] == "| hib | 40,000,000 | 1,100 | 0.02 | 950 | 0.02 |"
     assert main(["table", *runs, "--metrics", "win_rate"]) == 2

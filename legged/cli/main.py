@@ -278,7 +278,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="comma-separated evaluation JSON files in each run (e.g. "
                          "eval_native.json,eval_ood_native.json)")
     tb.add_argument("--metrics", type=lambda s: [m for m in s.split(",") if m],
-                    default=["episode_return", "tracking_error_mps", "fall_rate"],
+                    default=["episode_return", "tracking_error_mps", "episodes_with_a_fall"],
                     help="comma-separated report fields")
     tb.set_defaults(fn=cmd_table)
 

@@ -203,16 +203,16 @@ def cmd_navigate(args) -> int:
         from web.source import check_port
 
         check_port(args.host, args.port)  # fail before the work
+    where = dict(where, start=[round(float(v), 4) for v in start[:3]], goal=[round(float(v), 4) for v in goal[:3]])
     try:
         report = navigate(policy_dir, maps, start, goal, args.physics, args.threads or None,
                           planner=_planner_config(args), seed=args.seed, robot=args.robot,
-                          on_step=None if recording is None else recording.add, max_speed=args.max_speed)
+                          on_step=None if recording is None else recording.add, max_speed=args.max_speed,
+                          where=where)
     except Unreachable as exc:
         print(json.dumps(dict(where, success=False, reachable=False, error=str(exc))) if args.json
               else f"legged navigate: {exc}")
         return 1
-    report = dict(where, start=[round(float(v), 4) for v in start[:3]], goal=[round(float(v), 4) for v in goal[:3]],
-                  **report)
     print(json.dumps(report) if args.json else json.dumps(report, indent=2))
     if recording is not None:
         traj = recording.trajectory(dict(report, task="navigation"))

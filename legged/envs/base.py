@@ -21,6 +21,7 @@ from mujoco import mjx
 from legged.envs.api import MjxEnv
 from legged.envs.config import EnvConfig
 from legged.envs.engine_models import EngineModels
+from legged.envs.events import fall_events
 from legged.envs.physics import PhysicsView, Spawn
 from legged.envs.math import quat_from_yaw, rotate_inv, up_z
 from legged.envs.motor import motor_limits, servo_gains, within_motor_curve
@@ -299,7 +300,7 @@ class LeggedEnv(EngineModels, MjxEnv, abc.ABC):
         obs, info = self._observe(data, info, k_noise)
         metrics = {f"reward/{k}": v for k, v in terms.items()}
         metrics.update(task_metrics, diverged=bad.astype(jnp.float32), fell=fell.astype(jnp.float32),
-                       collisions=info["collisions"], base_height=height)
+                       collisions=info["collisions"], base_height=height, **fall_events(fell, fell, self.dt))
         return state.replace(pipeline_state=data, obs=obs, reward=reward.astype(jnp.float32),
                              done=done.astype(jnp.float32), metrics=metrics, info=info)
 

@@ -2,7 +2,8 @@
 
 This is what trainers and evaluators drive. A finished environment is reset with a fresh random key (a new
 world tile, spawn, randomisation), not rewound to its first state, and the episode it finished is summed
-up: return, length, every reward term and the task's metrics at the last step.
+up: return, length, every reward term and every event count summed over the episode (`SUMMED`), the task's
+other metrics at the last step.
 """
 
 from __future__ import annotations
@@ -30,7 +31,8 @@ class Batch:
     keys: jax.Array
     """One PRNG key per environment, for its next reset."""
     sums: dict
-    """Running sums of the current episode per environment: 'return', 'length' and each 'reward/<term>'."""
+    """Running sums of the current episode per environment: 'return', 'length', each 'reward/<term>' and each
+    'events/<event>'."""
 
 
 @jax.tree_util.register_dataclass
@@ -50,6 +52,16 @@ class StepResult:
     """For each episode statistic, its value for the episodes that ended here and 0 elsewhere, shape (n,)."""
 
 
+SUMMED = ("reward/", "events/")
+"""Prefixes of the metrics summed over an episode: weighted reward terms, and counts of events as they happen
+(`events/falls`: each time the task's fall rule triggers; `events/seconds_down`: time spent fallen; ...)."""
+
+
+def summed(key: str) -> bool:
+    """Whether the metric `key` is summed over an episode (`SUMMED`) rather than read at its last step."""
+    return key.startswith(SUMMED)
+
+
 def account(sums: dict, nxt: State) -> tuple[dict, dict, jax.Array, jax.Array]:
     """Episode bookkeeping of one vector step: (running sums with finished episodes cleared, `finished`
     statistics, done, time_out) from the sums before the step and the stepped states `nxt`."""
@@ -58,10 +70,10 @@ def account(sums: dict, nxt: State) -> tuple[dict, dict, jax.Array, jax.Array]:
     sums["return"] = sums["return"] + nxt.reward
     sums["length"] = sums["length"] + 1.0
     for k in sums:
-        if k.startswith("reward/"):
+        if summed(k):
             sums[k] = sums[k] + nxt.metrics[k]
     finished = {k: jnp.where(done, v, 0.0) for k, v in sums.items()}
-    finished.update({k: jnp.where(done, v, 0.0) for k, v in nxt.metrics.items() if not k.startswith("reward/")})
+    finished.update({k: jnp.where(done, v, 0.0) for k, v in nxt.metrics.items() if not summed(k)})
     sums = {k: jnp.where(done, 0.0, v) for k, v in sums.items()}
     return sums, finished, done, done & (nxt.info["truncation"] > 0)
 
@@ -113,7 +125,7 @@ class VectorEnv:
         return self.native.physics.seconds if self.physics == "native" else None
 
     def _zero_sums(self, state: State) -> dict:
-        sums = {k: jnp.zeros(self.num_envs) for k in state.metrics if k.startswith("reward/")}
+        sums = {k: jnp.zeros(self.num_envs) for k in state.metrics if summed(k)}
         sums.update(**{"return": jnp.zeros(self.num_envs), "length": jnp.zeros(self.num_envs)})
         return sums
 

@@ -5,12 +5,13 @@
   `tracking_error_mps` (mean |commanded - actual| planar velocity in the heading frame),
   `smoothed_tracking_error_mps` (the same with the velocity low-pass filtered over `velocity_filter_s`, which
   averages out the torso's sway within each step), `smoothed_yaw_rate_error_radps` (mean |commanded - actual|
-  yaw rate, filtered the same way), `fall_rate`.
+  yaw rate, filtered the same way), and the falls (legged.envs.events; a fall ends the episode).
 - `empty-goal`: the ball rests 1-2 m in front of the opponent goal, the robot starts 0.5-1.5 m from it at
   any bearing, turned anyhow; the episode ends at a goal (or a fall, or after `episode_seconds`); reported: `goal_rate`.
 - `getup`: the robot starts lying at the centre spot (on its front, back or a side, any heading, joints
   jittered) and has `getup_seconds` to stand (torso origin above `stand_height`, up axis within 25 degrees
-  of vertical, for `stand_hold_s`); reported: `success_rate`, `time_to_stand_s`. Falls do not end it.
+  of vertical, for `stand_hold_s`); reported: `success_rate`, `time_to_stand_s`. Falls do not end it; lying at
+  the start is no fall, falling again after rising is.
 
 `DrillEnv` is a single-agent environment (like the soccer learner's view): agent 0 is the player. With
 `placo=True` the placo player (legged.soccer.placo.player) drives it from inside the step and the actions
@@ -120,11 +121,13 @@ class DrillEnv(LearnerView):
                                    self.robot.standing_height)
         qpos, qvel = rules.place_ball(qpos, spawn.qvel, lay.ball_qpos_adr, lay.ball_dof_adr, ball,
                                       scene.ball_radius)
-        if self.drill.name == "getup":
+        fallen = spawn.info["fallen"]
+        if self.drill.name == "getup":  # put down lying: down from the start, not a fall in the drill
             qpos = self._lying(qpos, player[2], jax.random.fold_in(k_robot, 1))
+            fallen = fallen.at[0].set(True)
         low, high = jnp.asarray(self.drill.command_low), jnp.asarray(self.drill.command_high)
         commands = low + (high - low) * jax.random.uniform(k_cmd, (self._segments, 3))
-        info = dict(spawn.info, commands=commands, speed_sum=jnp.float32(0.0), error_sum=jnp.float32(0.0),
+        info = dict(spawn.info, fallen=fallen, commands=commands, speed_sum=jnp.float32(0.0), error_sum=jnp.float32(0.0),
                     smoothed_error_sum=jnp.float32(0.0), yaw_error_sum=jnp.float32(0.0),
                     velocity_filtered=jnp.zeros(3, jnp.float32), standing_steps=jnp.int32(0), stood_step=jnp.int32(-1))
         return Spawn(qpos=qpos, qvel=qvel, ctrl=spawn.ctrl, info=info)

@@ -7,7 +7,8 @@ plus the game in the agent's heading frame; proprioception only in vision mode),
 (everything in `state` without noise plus ground truth for critics and teachers), and in vision mode
 `camera` ([n_agents, 4, H, W]: RGB and depth from the head camera) and `features` (the state task's
 `state` without noise, which a state teacher reads while its vision student learns). `State.reward` is [n_agents];
-`State.metrics` holds each weighted reward term as `reward/<term>` [n_agents] and the game's statistics.
+`State.metrics` holds each weighted reward term as `reward/<term>` [n_agents], the falls and get-ups of the step as
+`events/<name>` [n_agents] (legged.envs.events) and the game's statistics.
 
 The game: a goal scores +-1 and play restarts from the kick-off poses (or the episode ends, with
 `end_on_goal`); a ball over a line outside a goal is put back at rest just inside that line; a robot
@@ -28,6 +29,7 @@ from brax.envs.base import State
 from mujoco import mjx
 
 from legged.envs.api import MjxEnv
+from legged.envs.events import fall_events, getup_events
 from legged.envs.motor import motor_limits, servo_gains, within_motor_curve
 from legged.envs.physics import PhysicsView, Spawn
 from legged.envs.randomize import MODEL_DR, check_latency, late_controls
@@ -47,7 +49,7 @@ from legged.soccer.vision.estimate_noise import (blurred, first_error, first_sig
                                                  next_sighting)
 from legged.soccer.vision.sightings import (BALL_MIN_SHADE, NET_MIN_SHADE, SIGHTED, SIGHTING_SIZE, camera_agents,
                                             pixel_points, sighting)
-from legged.soccer.walker import WALKER_STATE_SIZE
+from legged.soccer.walker import WALKER_STATE_SIZE, getting_up
 
 
 class SoccerEnv(MjxEnv):
@@ -203,6 +205,8 @@ class SoccerEnv(MjxEnv):
         reward = jnp.where(bad, 0.0, sum(terms.values()))
         info["score"] = info["score"] + jnp.stack([call.home_scores, call.away_scores]).astype(jnp.int32)
         info["out_of_play"] = info["out_of_play"] + call.out.astype(jnp.int32)
+        events = {**fall_events(fallen & ~info["fallen"], fallen, self.dt),
+                  **getup_events(info["getting_up"], getting_up(info["walker_state"]))}
         info["fallen"] = fallen
         info["last_action"], info["last_qvel"] = action, b.qd
 
@@ -218,6 +222,7 @@ class SoccerEnv(MjxEnv):
         info["last_action"] = jnp.where(kickoff, 0.0, info["last_action"])
         info["last_qvel"] = jnp.where(kickoff, 0.0, info["last_qvel"])
         info["walker_state"] = jnp.where(kickoff, 0.0, info["walker_state"])
+        info["getting_up"] = getting_up(info["walker_state"])  # after a kick-off: standing, not getting up
         now = observe.read_bodies(self.layout, data.qpos, data.qvel)  # after the restarts
         if c.estimate_noise.enabled and c.estimate_noise.sight:  # where each player last saw the ball
             info["ball_sighting"] = next_sighting(c.estimate_noise, info["ball_sighting"], now.pos[:, :2], now.yaw,
@@ -228,7 +233,7 @@ class SoccerEnv(MjxEnv):
         metrics.update(goals_home=score[0], goals_away=score[1],
                        out_of_play=info["out_of_play"].astype(jnp.float32), fell=fallen.astype(jnp.float32),
                        dist_to_ball=jnp.linalg.norm(b.ball_pos[:2] - b.pos[:, :2], axis=-1),
-                       ball_speed=jnp.linalg.norm(b.ball_vel[:2]), diverged=bad.astype(jnp.float32))
+                       ball_speed=jnp.linalg.norm(b.ball_vel[:2]), diverged=bad.astype(jnp.float32), **events)
         if c.velocity_in_state:  # for walkers that read it (op3-walk's state ends with it)
             info["velocity_estimate"] = observe.velocity_estimate(now, c.noise.lin_vel if c.noise.enabled else 0.0,
                                                                   jax.random.fold_in(k_noise, 17))
@@ -366,7 +371,7 @@ class SoccerEnv(MjxEnv):
         """Episode bookkeeping at the start of a game."""
         zeros = jnp.zeros((self.n_agents, self.action_size))
         return dict(rng=rng, step=jnp.int32(0), last_action=zeros, last_qvel=zeros, score=jnp.zeros(2, jnp.int32),
-                    fallen=jnp.zeros(self.n_agents, bool), out_of_play=jnp.int32(0), truncation=jnp.float32(0.0),
+                    fallen=jnp.zeros(self.n_agents, bool), getting_up=jnp.zeros(self.n_agents, bool), out_of_play=jnp.int32(0), truncation=jnp.float32(0.0),
                     teleported=jnp.bool_(False), players=initial_memory(self.n_agents),
                     walker_state=jnp.zeros((self.n_agents, WALKER_STATE_SIZE), jnp.float32),
                     **({"velocity_estimate": jnp.zeros((self.n_agents, 3))} if self.config.velocity_in_state else {}))

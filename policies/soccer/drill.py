@@ -8,7 +8,7 @@ import dataclasses
 import numpy as np
 
 from legged.robots import OP3
-from legged.robots.models import checked_model
+from legged.robots.models import checked_model, model_path
 from legged.robots.op3 import OP3_CTRL_DT
 from legged.skills.config import GetUpConfig
 from legged.skills.env import GetUpSkillEnv, WalkSkillEnv
@@ -16,9 +16,10 @@ from legged.soccer.config import SoccerConfig
 from legged.soccer.drills import DrillConfig, DrillEnv
 from legged.tasks import task_entry
 from policies.environments import steer_with_pilot
-from policies.evaluate import estimate_errors, evaluate
+from policies.evaluate import estimate_errors, evaluate, fall_figures
 from policies.policy_io import GETUP_SCRIPT as SCRIPT  # `--player script`: the get-up script open loop
 from policies.policy_io import load_policy, load_walker
+from policies.provenance import checkpoint_record, frozen_runs, repo_path, sealed
 from policies.run_dir import RunDir, check_policy
 
 SKILL_DRILLS = {"op3-walk": "walk", "op3-getup": "getup"}
@@ -131,11 +132,10 @@ def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "
     policy = drill_player(player, env, checkpoint)
     finals = evaluate(env, policy, episodes, seed, physics, num_envs, threads, progress=progress)
     errors = estimate_errors(finals)  # a vision player that estimates the game
-    fell = np.array([f["fell"] > 0 for f in finals])
-    played = str(policy.checkpoint) if hasattr(policy, "checkpoint") else None  # a run's checkpoint
+    played = repo_path(policy.checkpoint) if hasattr(policy, "checkpoint") else None  # a run's checkpoint
     report = {"drill": name, "player": player, "checkpoint": played, "episodes": len(finals), "physics": physics,
-              "seed": seed, "randomized": randomize, "robot": robot, "fall_rate": float(fell.mean()),
-              "episode_seconds": float(np.mean([f["time_s"] for f in finals]))}
+              "seed": seed, "randomized": randomize, "robot": robot,
+              "episode_seconds": float(np.mean([f["time_s"] for f in finals])), **fall_figures(finals)}
     if errors:
         report["estimate_rms_m"] = errors
     if getattr(env, "state_pilot", None) is not None:
@@ -153,4 +153,6 @@ def run_drill(name: str, player: str, episodes: int, seed: int, physics: str = "
         report.update(goal_rate=float(scored.mean()),
                       time_to_goal_s=float(np.mean([f["time_s"] for f in finals if f["goals_for"] > 0]))
                       if scored.any() else None)
-    return report
+    runs = {} if played is None else dict(policy=checkpoint_record(policy),
+                                          **frozen_runs(RunDir(player).load_config()))
+    return sealed(report, runs, {robot: model_path(OP3, robot) or OP3.mjcf_path})
