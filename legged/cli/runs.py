@@ -1,9 +1,10 @@
-"""The command line's commands on run directories: `legged convert-checkpoints`, `legged slim`, `legged average`
-and `legged curve`."""
+"""The command line's commands on run directories: `legged convert-checkpoints`, `legged slim`, `legged average`,
+`legged curve` and `legged card`."""
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 
 from legged.cli.args import SEED, add_physics_options, bounded
@@ -64,6 +65,49 @@ def cmd_curve(args) -> int:
     return 0
 
 
+def cmd_card(args) -> int:
+    """`legged card`: the figures of cards written (or checked) from the JSONs beside them; `--summary`: the tables
+    of shipped policies in README.md and docs/policies.md from the cards."""
+    from policies.card_summary import write_summaries  # the cards' modules load torch: only for this command
+    from policies.cards import CardError, run_exists, write_card
+
+    if bool(args.run_dir) == args.summary:
+        raise ValueError("name the run directories whose cards to write, or --summary for the tables of shipped "
+                         "policies (not both)")
+    if args.summary:
+        results = write_summaries(".", check=args.check)
+        stale = [page for page, current in results.items() if not current]
+    else:
+        for run_dir in args.run_dir:  # every directory checked before any card is written
+            run_exists(run_dir)
+        results = {run_dir: write_card(run_dir, check=args.check) for run_dir in args.run_dir}
+        stale = [run_dir for run_dir, r in results.items() if not r["up_to_date"]]
+    if args.json:
+        print(json.dumps({"checked" if args.check else "written": results, "stale": stale}))
+    else:
+        for name in results:
+            state = "stale" if name in stale else "up to date"
+            print(f"[card] {name}: {state if args.check else ('rewritten' if name in stale else 'up to date')}")
+    if args.check and stale:
+        raise CardError(f"{', '.join(stale)}: not as the JSONs have them; run `legged card "
+                        f"{'--summary' if args.summary else ' '.join(stale)}`")
+    return 0
+
+
+def cmd_lint_figures(args) -> int:
+    """`legged lint-figures`: the figures on the pages that no file they cite holds (exit 1 if any)."""
+    from policies.figure_lint import lint  # reads JSON only, but lives with the cards
+
+    findings = lint(".", args.page or None)
+    if args.json:
+        print(json.dumps([dataclasses.asdict(f) for f in findings]))
+    else:
+        for finding in findings:
+            print(finding)
+        print(f"[lint-figures] {len(findings)} figure(s) no cited file holds")
+    return 1 if findings else 0
+
+
 def _weights(text: str) -> list[float]:
     """Parser of comma-separated checkpoint weights (for argparse `type=`)."""
     try:
@@ -73,7 +117,7 @@ def _weights(text: str) -> list[float]:
 
 
 def add_run_commands(sub) -> None:
-    """Register `convert-checkpoints`, `slim`, `average` and `curve`."""
+    """Register `convert-checkpoints`, `slim`, `average`, `curve` and `card`."""
     cv = sub.add_parser("convert-checkpoints", help="rewrite a run's old pickled checkpoints as data-only files")
     cv.add_argument("run_dir")
     cv.add_argument("--trust-pickles", action="store_true",
@@ -114,3 +158,18 @@ def add_run_commands(sub) -> None:
     cu.add_argument("--json", action="store_true", help="one-line JSON: the plot and every point")
     cu.add_argument("--quiet", action="store_true", help="no progress bars")
     cu.set_defaults(fn=cmd_curve)
+
+    ca = sub.add_parser("card", help="write the figures of policies' CARD.md from the evaluation JSONs beside them "
+                                     "(each checked: written by an evaluation of that checkpoint, unedited)")
+    ca.add_argument("run_dir", nargs="*", help="run directories with a CARD.md whose header names its JSONs")
+    ca.add_argument("--summary", action="store_true",
+                    help="instead, the tables of shipped policies in README.md and docs/policies.md, from the cards")
+    ca.add_argument("--check", action="store_true", help="write nothing; exit 2 if a card or table is stale")
+    ca.add_argument("--json", action="store_true", help="one-line JSON")
+    ca.set_defaults(fn=cmd_card)
+
+    lf = sub.add_parser("lint-figures", help="list the decimal numbers and percentages on README.md, docs/ and the "
+                                             "cards that no JSON or run the page cites holds (exit 1 if any)")
+    lf.add_argument("page", nargs="*", help="pages to check, relative to the repository (default: all of them)")
+    lf.add_argument("--json", action="store_true", help="one JSON list of findings")
+    lf.set_defaults(fn=cmd_lint_figures)

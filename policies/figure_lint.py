@@ -1,0 +1,254 @@
+"""The figure linter: every decimal number and percentage a page prints must be a value of the evidence it cites.
+
+A page (README.md, docs/*.md, a policy's CARD.md) cites evidence by naming it: a JSON file (`eval_native.json`,
+`assets/runs/RUN/eval.json`), or a run, policy or benchmark directory (`assets/runs/RUN`: its JSONs, its training
+metrics and its config.yaml).
+Names are looked up beside the page, from the repository's root, and in the directories the page names. A printed
+number matches a value when it is that value rounded to the printed decimals (a percentage: the value, or 100 times
+it); `13.27M` and `2.5k` are read as 13,270,000 and 2,500. Besides the values themselves, the evidence gives counts:
+a share or a per-episode figure times the report's episodes (`falls_per_episode` 0.25 of 64 games: 16 falls).
+Numbers in code (indented blocks, fences, `inline`), in HTML comments and in link targets are commands and paths, not
+figures; so are dates and version numbers. What is left and matches nothing is either a constant (a value of the
+physics or of a design, not a measurement: CONSTANTS for every page, or the page's own, declared in a comment
+`<!-- constants: 0.4 (step duration, s); 0.08 (double support, s) -->`) or a finding: a figure typed by hand that
+no file holds.
+"""
+
+from __future__ import annotations
+
+import bisect
+import dataclasses
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+CONSTANTS: dict[float, str] = {
+    0.02: "the Go1 tasks' control period, s",
+    0.025: "OP3 control period, s; planning grid resolution, m",
+    0.002: "a physics step, s",
+    0.005: "the longest physics step of another robot model, s",
+    1.92: "Menagerie's OP3 physics step, ms",
+    1.084: "Menagerie's OP3 joint damping, N m s/rad",
+    4.1: "OP3 servo torque limit, N m",
+    0.21: "the get-up drill's standing height, m",
+    0.245: "OP3 torso height at its default pose, m",
+    0.27: "Go1 trunk height at its default pose, m",
+    0.96: "the placo gait's stride (two steps), s",
+    0.5: "a half (ratios, seconds, metres in prose)",
+    1.5: "one and a half (seconds, metres in prose)",
+    2.5: "two and a half (prose)",
+}
+"""Numbers that are no measurement (physics and design values a page explains), each with what it is."""
+
+PERCENT_CONSTANTS: dict[float, str] = {95.0: "the confidence level of the intervals"}
+"""Percentages that are no measurement."""
+
+PAGES = ("README.md", "docs/*.md", "assets/policies/*/CARD.md")
+"""The pages checked, as globs from the repository's root."""
+SKIPPED = ("docs/cli-reference.md",)
+"""Pages generated from the parser: their numbers are the options' defaults."""
+
+_PAGE_CONSTANTS = re.compile(r"<!--\s*constants:(.*?)-->", re.S)
+_JSON = re.compile(r"(?<![\w/.-])((?:[\w.-]+/)*[\w.-]+\.json)\b")
+_DIR = re.compile(r"\b((?:assets/(?:runs|policies|benchmarks)|tests/fixtures/runs)/[\w.-]+)")
+_NUMBER = re.compile(r"(?<![\w.\-/:+])(-?\d{1,3}(?:,\d{3})+|-?\d+)(\.\d+)?(%|M\b|k\b|x\b)?(?![\w.]*\d)")
+_RANGE = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?)(?=-\d+(?:\.\d+)?(%|M\b|k\b))")
+_SCIENTIFIC = re.compile(r"\b\d+(?:\.\d+)?e[-+]?\d+\b")
+_DATE = re.compile(r"\b\d{4}-\d{2}-\d{2}\b")
+_VERSION = re.compile(r"\b\d+\.\d+\.\d+\b|\bv\d+(?:\.\d+)*\b|(?:[<>=]=|[≥≤]) ?\d+(?:\.\d+)*|\b(?:Python|python|torch|"
+                      r"MuJoCo|mujoco(?:-mjx)?|jax(?:lib)?|JAX|brax|Brax|MJX|placo|OMPL|ompl|viser|rsl-rl(?:-lib)?|"
+                      r"Chromium|chromium|numpy|scipy|version|versions)[ =]+[\d.]+")
+
+
+@dataclasses.dataclass(frozen=True)
+class Finding:
+    """A printed figure no cited file holds."""
+
+    page: str
+    """The page, relative to the repository."""
+    line: int
+    """Its line number."""
+    text: str
+    """The figure as printed."""
+    context: str
+    """The line around it."""
+
+    def __str__(self) -> str:
+        return f"{self.page}:{self.line}: {self.text} ({self.context.strip()[:100]})"
+
+
+def prose_lines(text: str) -> list[tuple[int, str]]:
+    """(line number, text) of a page's prose: without code blocks (fenced or indented by 4), inline code, HTML
+    comments, link targets, dates, version numbers and numbers in scientific notation (tolerances and settings); the
+    first end of a range takes the unit of the second (`91.91-101.91M`)."""
+    text = re.sub(r"<!--.*?-->", lambda m: "\n" * m.group(0).count("\n"), text, flags=re.S)
+    out, fenced = [], False
+    for number, line in enumerate(text.splitlines(), 1):
+        if line.lstrip().startswith("```"):
+            fenced = not fenced
+            continue
+        if fenced or line.startswith("    ") and not line.lstrip().startswith(("-", "|", "*")):
+            continue
+        line = re.sub(r"`[^`]*`", " ", line)
+        line = re.sub(r"\]\([^)]*\)", "]", line)
+        line = _SCIENTIFIC.sub(" ", _VERSION.sub(" ", _DATE.sub(" ", line)))
+        line = _RANGE.sub(lambda m: m.group(1) + m.group(2), line)  # 91.91-101.91M: both ends in millions
+        line = re.sub(r"(?<=[\d%Mk])-(?=\d)", " to ", line)  # a range's second end is a figure too
+        out.append((number, line))
+    return out
+
+
+_COUNTED = re.compile(r"\s*(goals?|falls?|wins?)\b")
+"""A count the evidence holds, after an integer: integers are figures only before these words."""
+_DURATION = re.compile(r"\s*(minutes?|min|hours?|h)\b")
+"""A duration's unit after a number: the evidence holds seconds."""
+
+
+def printed_numbers(line: str) -> list[tuple[str, list[tuple[float, float, bool]]]]:
+    """(as printed, its readings) of each decimal number and percentage on a line, and of each integer that counts
+    goals, falls or wins (other integers are not figures here). A reading is (value, tolerance: half the last printed digit, percentage); M and k scale the
+    value, and a number of minutes or hours may also be read as seconds, which the evidence holds."""
+    found = []
+    for m in _NUMBER.finditer(line):
+        whole, fraction, suffix = m.group(1), m.group(2) or "", m.group(3) or ""
+        if not fraction and suffix != "%" and not _COUNTED.match(line, m.end()):
+            continue
+        value = float(whole.replace(",", "") + fraction)
+        scale = {"M": 1e6, "k": 1e3}.get(suffix, 1.0)
+        tolerance = 0.5 * 10.0 ** -max(len(fraction) - 1, 0) * scale + 1e-9
+        readings = [(value * scale, tolerance, suffix == "%")]
+        unit = _DURATION.match(line, m.end())
+        if unit and not suffix:
+            seconds = 60.0 if unit.group(1).startswith("m") else 3600.0
+            readings.append((value * seconds, tolerance * seconds, False))
+        found.append((m.group(0), readings))
+    return found
+
+
+def cited_files(page: Path, text: str, root: Path) -> list[Path]:
+    """The evidence files a page names: JSONs, and the JSONs, JSON lines (training metrics) and config.yaml of the
+    directories it names."""
+    bases = [page.parent, root]
+    dirs = {root / d for d in _DIR.findall(text)}
+    bases += sorted(d for d in dirs if d.is_dir())
+    files = set()
+    for name in _JSON.findall(text):
+        for base in bases:
+            if (base / name).is_file():
+                files.add((base / name).resolve())
+    for d in dirs:
+        if d.is_dir():
+            files.update(p.resolve() for p in d.glob("**/*.json"))
+            files.update(p.resolve() for p in d.glob("*.jsonl"))
+            files.update(p.resolve() for p in d.glob("config.yaml"))
+    return sorted(files)
+
+
+SHARE_KEYS = re.compile(r"rate|share|fraction|with_a_fall|success|win|ci95|interval|ratio|stood|scored")
+"""Keys whose values are shares: the only values a percentage is read against (times 100)."""
+
+
+def _walk(node, out: dict, key: str = "") -> None:
+    """Collect the numbers under `node` into out["all"], the shares (SHARE_KEYS) also into out["shares"]."""
+    if isinstance(node, bool):
+        return
+    if isinstance(node, (int, float)):
+        if np.isfinite(node):
+            out["all"].append(float(node))
+            if SHARE_KEYS.search(key):
+                out["shares"].append(float(node))
+        return
+    if isinstance(node, dict):
+        episodes = node.get("episodes") or node.get("games")
+        for name, value in node.items():
+            _walk(value, out, str(name))
+            if isinstance(episodes, (int, float)) and isinstance(value, (int, float)) and not isinstance(value, bool) \
+                    and (str(name).endswith(("_per_episode", "_rate")) or name == "episodes_with_a_fall"):
+                out["all"].append(float(value) * episodes)  # the count behind a share or a mean
+    elif isinstance(node, list):
+        for value in node:
+            _walk(value, out, key)
+
+
+def curve_ends(records: list[dict]) -> dict:
+    """What a page may quote of a training run's metrics (one record per line): each field's first, last, lowest,
+    highest, mean and median value (not every point of the curve, which would match almost any number)."""
+    series: dict[str, list[float]] = {}
+    for record in records:
+        for key, value in record.items():
+            if isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value):
+                series.setdefault(key, []).append(float(value))
+    return {key: [v[0], v[-1], min(v), max(v), float(np.mean(v)), float(np.median(v))] for key, v in series.items()}
+
+
+def evidence_values(files: list[Path]) -> dict[str, np.ndarray]:
+    """Every number the files hold (JSON or YAML), with the counts behind their shares (`all`), and the shares among
+    them (`shares`), each sorted."""
+    values: dict[str, list[float]] = {"all": [], "shares": []}
+    for path in files:
+        try:
+            text = path.read_text()
+            data = json.loads(text) if path.suffix == ".json" else \
+                curve_ends([json.loads(line) for line in text.splitlines() if line.strip()]) \
+                if path.suffix == ".jsonl" else yaml.safe_load(text)
+        except (ValueError, yaml.YAMLError, OSError):
+            continue
+        _walk(data, values)
+    return {"all": np.unique(np.asarray(values["all"] + list(CONSTANTS), float)),
+            "shares": np.unique(np.asarray(values["shares"] + [p / 100 for p in PERCENT_CONSTANTS], float))}
+
+
+def _near(values: np.ndarray, target: float, tolerance: float) -> bool:
+    i = bisect.bisect_left(values, target - tolerance)
+    return i < len(values) and values[i] <= target + tolerance
+
+
+def _matches(value: float, tolerance: float, percentage: bool, values: dict) -> bool:
+    """Whether a printed reading is a value of the evidence within `tolerance`, or its magnitude is (a penalty printed
+    either way); a percentage is read against the shares, times 100."""
+    if percentage:
+        return _near(values["shares"], abs(value) / 100.0, tolerance / 100.0)
+    return _near(values["all"], value, tolerance) or _near(values["all"], -value, tolerance)
+
+
+def page_constants(text: str) -> list[float]:
+    """The values a page declares as constants (`<!-- constants: VALUE (what); ... -->`), percentages as shares."""
+    out = []
+    for block in _PAGE_CONSTANTS.findall(text):
+        for item in block.split(";"):
+            m = re.match(r"\s*(-?\d+(?:\.\d+)?)(%?)\s*\(", item)
+            if m:
+                out.append(float(m.group(1)) / (100.0 if m.group(2) else 1.0))
+    return out
+
+
+def lint_page(page: Path, root: Path) -> list[Finding]:
+    """The figures on `page` that no file it cites holds."""
+    text = page.read_text()
+    values = evidence_values(cited_files(page, text, root))
+    own = page_constants(text)
+    if own:
+        values = {"all": np.unique(np.concatenate([values["all"], own])),
+                  "shares": np.unique(np.concatenate([values["shares"], own]))}
+    out = []
+    for number, line in prose_lines(text):
+        for printed, readings in printed_numbers(line):
+            if not any(_matches(value, tolerance, percentage, values) for value, tolerance, percentage in readings):
+                out.append(Finding(page.relative_to(root).as_posix(), number, printed, line))
+    return out
+
+
+def pages(root: Path) -> list[Path]:
+    """Every page the linter reads."""
+    found = sorted({p for pattern in PAGES for p in root.glob(pattern)})
+    return [p for p in found if p.relative_to(root).as_posix() not in SKIPPED]
+
+
+def lint(root: str | Path = ".", only: list[str] | None = None) -> list[Finding]:
+    """The findings of every page (or of the pages in `only`, relative to `root`)."""
+    root = Path(root).resolve()
+    chosen = pages(root) if only is None else [root / p for p in only]
+    return [finding for page in chosen for finding in lint_page(page, root)]
