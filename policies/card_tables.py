@@ -41,7 +41,8 @@ SOCCER: list[Column] = [
 TRACKING: list[Column] = [("episodes", "episodes", count), ("tracking error, m/s", "tracking_error_mps", number(3))]
 WALK_DRILL: list[Column] = TRACKING + [
     ("smoothed tracking error, m/s", "smoothed_tracking_error_mps", number(3)),
-    ("smoothed yaw-rate error, rad/s", "smoothed_yaw_rate_error_radps", number(3)), ("speed, m/s", "speed_mps", number(3)),
+    ("smoothed yaw-rate error, rad/s", "smoothed_yaw_rate_error_radps", number(3)),
+    ("speed, m/s", "speed_mps", number(3)),
 ]
 GETUP_DRILL: list[Column] = [("episodes", "episodes", count), ("stood", "success_rate", percent),
                              ("time to stand, s", "time_to_stand_s", number(2))]
@@ -50,6 +51,12 @@ GOAL_DRILL: list[Column] = [("episodes", "episodes", count), ("scored", "goal_ra
 CONFINED: list[Column] = [
     ("worlds", "episodes", count), ("success", "success_rate", percent),
     ("time to goal, s", "time_to_goal_s", number(2)), ("collisions per episode", "collisions_per_episode", number(2)),
+]
+NAVIGATION: list[Column] = [
+    ("episodes", "episodes", count), ("successes", "successes", count), ("success", "success_rate", percent),
+    ("median time to goal / path at the limit", "time_vs_path_at_speed", number(2)),
+    ("p95 speed, m/s", "p95_speed_mps", number(2)), ("collisions per episode", "collisions", number(1)),
+    ("falls per episode", "falls_per_episode", number(1)), ("replans per episode", "replans", number(1)),
 ]
 ESTIMATE: list[Column] = [("ball estimate RMS error, m", "estimate_rms_m.ball", number(3))]
 
@@ -65,6 +72,8 @@ def value(figures: dict, key: str):
 
 def columns_of(figures: dict) -> list[Column]:
     """The columns that describe one set of figures (one robot model's, one level's, one drill's)."""
+    if "successes" in figures:
+        return NAVIGATION
     if "drill" in figures or "speed_mps" in figures or "goal_rate" in figures or "time_to_stand_s" in figures:
         kind = WALK_DRILL if "speed_mps" in figures else GOAL_DRILL if "goal_rate" in figures else GETUP_DRILL
     elif "goals_for_per_episode" in figures:
@@ -105,7 +114,9 @@ def report_rows(report: dict) -> tuple[str, list[tuple[str, dict]]]:
     if "difficulties" in report:
         return "level", [(f"d{level}", figures) for level, figures in report["difficulties"].items()]
     if "scenes" in report and "total" in report:
-        return "scenes", [("all", dict(report["total"], episodes=report["total"]["episodes"]))]
+        total = report["total"]
+        return "scene", [(row["scene"], row) for row in report["scenes"]] + [(
+            "**all**", dict(total, time_vs_path_at_speed=total["median_time_vs_path_at_speed"]))]
     rows = [(report.get("robot") or "project", report)]
     for role in ("teacher", "pilot"):
         if isinstance(report.get(role), dict):

@@ -9,14 +9,13 @@ A card declares, in a comment at its top, what the policy does and which JSONs h
     -->
 
 (`deploy: true`: a policy to deploy, listed in the README; older versions kept for the runs trained through them say
-nothing) and holds, between FIGURES_BEGIN and FIGURES_END, one table per JSON in that order: what was measured, the command
-that measured it (from the JSON's provenance), and the figures. `legged card RUN` rewrites that section (the prose
-around it is the author's); `legged card RUN --check` says whether it is as the JSONs have it. Every JSON must have
-been written by an evaluation (policies.provenance: an intact body hash) of this run's checkpoint (the tensors it
+nothing) and holds, between FIGURES_BEGIN and FIGURES_END, one table per JSON in that order: what was measured, the
+command that measured it (from the JSON's provenance), and the figures. `legged card RUN` rewrites that section (the
+prose around it is the author's); `legged card RUN --check` says whether it is as the JSONs have it. Every JSON must
+have been written by an evaluation (policies.provenance: an intact body hash) of this run's checkpoint (the tensors it
 measured are the run's) through the walker, get-up and pilot the run's config names, or the command fails in one line
-naming the file. The first JSON gives the policy's
-headline (`headline`), which the README's and docs/policies.md's tables of shipped policies are made of
-(policies.card_summary).
+naming the file. The first JSON gives the policy's headline (policies.card_tables.headline), which the README's and
+docs/policies.md's tables of shipped policies are made of (policies.card_summary).
 """
 
 from __future__ import annotations

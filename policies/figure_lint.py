@@ -1,8 +1,9 @@
 """The figure linter: every decimal number and percentage a page prints must be a value of the evidence it cites.
 
-A page (README.md, docs/*.md, a policy's CARD.md) cites evidence by naming it: a JSON file (`eval_native.json`,
+A figure is checked against the evidence its section cites (from its heading to the next), and the evidence cited
+before the page's first heading (a card's header names its JSONs). A section cites evidence by naming it: a JSON file (`eval_native.json`,
 `assets/runs/RUN/eval.json`), or a run, policy or benchmark directory (`assets/runs/RUN`: its JSONs, its training
-metrics and its config.yaml).
+metrics and its config.yaml; a run record also by its name or the end of it, `raw-cpu2`).
 Names are looked up beside the page, from the repository's root, and in the directories the page names. A printed
 number matches a value when it is that value rounded to the printed decimals (a percentage: the value, or 100 times
 it); `13.27M` and `2.5k` are read as 13,270,000 and 2,500. Besides the values themselves, the evidence gives counts:
@@ -53,9 +54,12 @@ SKIPPED = ("docs/cli-reference.md",)
 
 _PAGE_CONSTANTS = re.compile(r"<!--\s*constants:(.*?)-->", re.S)
 _JSON = re.compile(r"(?<![\w/.-])((?:[\w.-]+/)*[\w.-]+\.json)\b")
+_RUN_NAME = re.compile(r"(?<![\w/.-])([a-z0-9][a-z0-9-]*-cpu2?)\b")
+"""A run named by its record's directory name, or the end of it (`raw-cpu2` for soccer-1v1-vision-raw-cpu2)."""
 _DIR = re.compile(r"\b((?:assets/(?:runs|policies|benchmarks)|tests/fixtures/runs)/[\w.-]+)")
 _NUMBER = re.compile(r"(?<![\w.\-/:+])(-?\d{1,3}(?:,\d{3})+|-?\d+)(\.\d+)?(%|M\b|k\b|x\b)?(?![\w.]*\d)")
 _RANGE = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?)(?=-\d+(?:\.\d+)?(%|M\b|k\b))")
+_LISTED = re.compile(r"(?<![\w.%])(\d+(?:\.\d+)?)(?=(?:\s*/\s*\d+(?:\.\d+)?)*\s*/\s*\d+(?:\.\d+)?%)")
 _SCIENTIFIC = re.compile(r"\b\d+(?:\.\d+)?e[-+]?\d+\b")
 _DATE = re.compile(r"\b\d{4}-\d{2}-\d{2}\b")
 _VERSION = re.compile(r"\b\d+\.\d+\.\d+\b|\bv\d+(?:\.\d+)*\b|(?:[<>=]=|[≥≤]) ?\d+(?:\.\d+)*|\b(?:Python|python|torch|"
@@ -83,7 +87,8 @@ class Finding:
 def prose_lines(text: str) -> list[tuple[int, str]]:
     """(line number, text) of a page's prose: without code blocks (fenced or indented by 4), inline code, HTML
     comments, link targets, dates, version numbers and numbers in scientific notation (tolerances and settings); the
-    first end of a range takes the unit of the second (`91.91-101.91M`)."""
+    first end of a range takes the unit of the second (`91.91-101.91M`), and the numbers of a list the percent sign
+    of its last (`92.7 / 95.3 / 80.0%`)."""
     text = re.sub(r"<!--.*?-->", lambda m: "\n" * m.group(0).count("\n"), text, flags=re.S)
     out, fenced = [], False
     for number, line in enumerate(text.splitlines(), 1):
@@ -96,6 +101,7 @@ def prose_lines(text: str) -> list[tuple[int, str]]:
         line = re.sub(r"\]\([^)]*\)", "]", line)
         line = _SCIENTIFIC.sub(" ", _VERSION.sub(" ", _DATE.sub(" ", line)))
         line = _RANGE.sub(lambda m: m.group(1) + m.group(2), line)  # 91.91-101.91M: both ends in millions
+        line = _LISTED.sub(lambda m: m.group(1) + "%", line)  # 92.7 / 95.3 / 80.0%: every one a percentage
         line = re.sub(r"(?<=[\d%Mk])-(?=\d)", " to ", line)  # a range's second end is a figure too
         out.append((number, line))
     return out
@@ -133,12 +139,17 @@ def cited_files(page: Path, text: str, root: Path) -> list[Path]:
     directories it names."""
     bases = [page.parent, root]
     dirs = {root / d for d in _DIR.findall(text)}
+    records = sorted(p.name for p in (root / "assets/runs").glob("*") if p.is_dir())
+    for name in set(_RUN_NAME.findall(text)):
+        dirs.update(root / "assets/runs" / r for r in records if r == name or r.endswith("-" + name))
     bases += sorted(d for d in dirs if d.is_dir())
     files = set()
     for name in _JSON.findall(text):
         for base in bases:
             if (base / name).is_file():
                 files.add((base / name).resolve())
+    if page.name == "CARD.md" and (page.parent / "config.yaml").is_file():  # a card's own run: its settings
+        files.add((page.parent / "config.yaml").resolve())
     for d in dirs:
         if d.is_dir():
             files.update(p.resolve() for p in d.glob("**/*.json"))
@@ -219,25 +230,36 @@ def page_constants(text: str) -> list[float]:
     out = []
     for block in _PAGE_CONSTANTS.findall(text):
         for item in block.split(";"):
-            m = re.match(r"\s*(-?\d+(?:\.\d+)?)(%?)\s*\(", item)
+            m = re.match(r"\s*(-?\d+(?:\.\d+)?)(%|M|k)?\s*\(", item)
             if m:
-                out.append(float(m.group(1)) / (100.0 if m.group(2) else 1.0))
+                out.append(float(m.group(1)) * {"%": 0.01, "M": 1e6, "k": 1e3}.get(m.group(2) or "", 1.0))
     return out
 
 
+def sections(text: str) -> list[tuple[int, str]]:
+    """(first line number, text) of a page's sections: the part before its first heading (a card's header, the
+    page's introduction), then each part from one heading to the next."""
+    starts = [0] + [i for i, line in enumerate(text.splitlines()) if line.startswith("#") and i > 0]
+    lines = text.splitlines()
+    return [(start, "\n".join(lines[start:end])) for start, end in zip(starts, starts[1:] + [len(lines)])]
+
+
 def lint_page(page: Path, root: Path) -> list[Finding]:
-    """The figures on `page` that no file it cites holds."""
+    """The figures on `page` that no file cited in their section (or before the page's first heading) holds."""
     text = page.read_text()
-    values = evidence_values(cited_files(page, text, root))
+    parts = sections(text)
+    head = parts[0][1]
     own = page_constants(text)
-    if own:
-        values = {"all": np.unique(np.concatenate([values["all"], own])),
-                  "shares": np.unique(np.concatenate([values["shares"], own]))}
     out = []
-    for number, line in prose_lines(text):
-        for printed, readings in printed_numbers(line):
-            if not any(_matches(value, tolerance, percentage, values) for value, tolerance, percentage in readings):
-                out.append(Finding(page.relative_to(root).as_posix(), number, printed, line))
+    for start, section in parts:
+        values = evidence_values(cited_files(page, head + "\n" + section, root))
+        if own:
+            values = {"all": np.unique(np.concatenate([values["all"], own])),
+                      "shares": np.unique(np.concatenate([values["shares"], own]))}
+        for number, line in prose_lines(section):
+            for printed, readings in printed_numbers(line):
+                if not any(_matches(value, tolerance, percentage, values) for value, tolerance, percentage in readings):
+                    out.append(Finding(page.relative_to(root).as_posix(), start + number, printed, line))
     return out
 
 

@@ -152,7 +152,8 @@ def add_run_commands(sub) -> None:
     cu.add_argument("--num-envs", type=bounded(int, 1, 4096), default=None, help="episodes run side by side")
     cu.add_argument("--nominal", action="store_true", help="domain randomisation and observation noise off")
     cu.add_argument("--figure", default="tracking_error_mps",
-                    help="the evaluation figure plotted (tracking_error_mps, episodes_with_a_fall, episode_return, ...)")
+                    help="the evaluation figure plotted (tracking_error_mps, episodes_with_a_fall, episode_return, "
+                         "...)")
     cu.add_argument("--goal", type=float, default=None, help="draw a dashed goal line at this value")
     cu.add_argument("--out", default=None, help="PNG file (default: the first RUN_DIR/curve_<figure>.png)")
     cu.add_argument("--json", action="store_true", help="one-line JSON: the plot and every point")

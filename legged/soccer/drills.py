@@ -127,8 +127,8 @@ class DrillEnv(LearnerView):
             fallen = fallen.at[0].set(True)
         low, high = jnp.asarray(self.drill.command_low), jnp.asarray(self.drill.command_high)
         commands = low + (high - low) * jax.random.uniform(k_cmd, (self._segments, 3))
-        info = dict(spawn.info, fallen=fallen, commands=commands, speed_sum=jnp.float32(0.0), error_sum=jnp.float32(0.0),
-                    smoothed_error_sum=jnp.float32(0.0), yaw_error_sum=jnp.float32(0.0),
+        info = dict(spawn.info, fallen=fallen, commands=commands, speed_sum=jnp.float32(0.0),
+                    error_sum=jnp.float32(0.0), smoothed_error_sum=jnp.float32(0.0), yaw_error_sum=jnp.float32(0.0),
                     velocity_filtered=jnp.zeros(3, jnp.float32), standing_steps=jnp.int32(0), stood_step=jnp.int32(-1))
         return Spawn(qpos=qpos, qvel=qvel, ctrl=spawn.ctrl, info=info)
 

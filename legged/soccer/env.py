@@ -371,7 +371,8 @@ class SoccerEnv(MjxEnv):
         """Episode bookkeeping at the start of a game."""
         zeros = jnp.zeros((self.n_agents, self.action_size))
         return dict(rng=rng, step=jnp.int32(0), last_action=zeros, last_qvel=zeros, score=jnp.zeros(2, jnp.int32),
-                    fallen=jnp.zeros(self.n_agents, bool), getting_up=jnp.zeros(self.n_agents, bool), out_of_play=jnp.int32(0), truncation=jnp.float32(0.0),
+                    fallen=jnp.zeros(self.n_agents, bool), getting_up=jnp.zeros(self.n_agents, bool),
+                    out_of_play=jnp.int32(0), truncation=jnp.float32(0.0),
                     teleported=jnp.bool_(False), players=initial_memory(self.n_agents),
                     walker_state=jnp.zeros((self.n_agents, WALKER_STATE_SIZE), jnp.float32),
                     **({"velocity_estimate": jnp.zeros((self.n_agents, 3))} if self.config.velocity_in_state else {}))
