@@ -1,18 +1,22 @@
-"""The figure linter: every decimal number and percentage a page prints must be a value of the evidence it cites.
+"""The figure linter: every figure a page prints must be a value of the evidence it cites.
 
-A figure is checked against the evidence its section cites (from its heading to the next), and the evidence cited
-before the page's first heading (a card's header names its JSONs). A section cites evidence by naming it: a JSON file (`eval_native.json`,
-`assets/runs/RUN/eval.json`), or a run, policy or benchmark directory (`assets/runs/RUN`: its JSONs, its training
-metrics and its config.yaml; a run record also by its name or the end of it, `raw-cpu2`).
-Names are looked up beside the page, from the repository's root, and in the directories the page names. A printed
-number matches a value when it is that value rounded to the printed decimals (a percentage: the value, or 100 times
-it); `13.27M` and `2.5k` are read as 13,270,000 and 2,500. Besides the values themselves, the evidence gives counts:
-a share or a per-episode figure times the report's episodes (`falls_per_episode` 0.25 of 64 games: 16 falls).
+Figures: decimal numbers, percentages, and integers that count goals, falls or wins. A figure is checked against the
+evidence its section cites (from its heading to the next) and the evidence cited before the page's first heading (a
+card's header names its JSONs; a card's own config.yaml counts too). A section cites evidence by naming it: a JSON
+file (`eval_native.json`, `assets/runs/RUN/eval.json`), or a run, policy or benchmark directory (`assets/runs/RUN`:
+its JSONs, its training metrics and its config.yaml; a run record also by its name or the end of it, `raw-cpu2`).
+Names are looked up beside the page, from the repository's root, and in the directories the section names.
+
+A printed number matches a value when it is that value rounded to the printed decimals; a percentage is read against
+the shares (keys such as `success_rate`, `episodes_with_a_fall`), times 100; `13.27M` and `2.5k` are read as
+13,270,000 and 2,500, and minutes or hours also as the seconds the evidence holds. Besides the values themselves the
+evidence gives counts (a share or a per-episode figure times the report's episodes: `falls_per_episode` 0.25 of 64
+games is 16 falls) and, of training metrics, each field's first, last, lowest, highest, mean and median value.
 Numbers in code (indented blocks, fences, `inline`), in HTML comments and in link targets are commands and paths, not
 figures; so are dates and version numbers. What is left and matches nothing is either a constant (a value of the
 physics or of a design, not a measurement: CONSTANTS for every page, or the page's own, declared in a comment
 `<!-- constants: 0.4 (step duration, s); 0.08 (double support, s) -->`) or a finding: a figure typed by hand that
-no file holds.
+no file holds. A sum or a ratio computed by hand is a finding too: print the values it comes from instead.
 """
 
 from __future__ import annotations
