@@ -66,7 +66,8 @@ _RANGE = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?)(?=-\d+(?:\.\d+)?(%|M\b|k\b))")
 _LISTED = re.compile(r"(?<![\w.%])(\d+(?:\.\d+)?)(?=(?:\s*/\s*\d+(?:\.\d+)?)*\s*/\s*\d+(?:\.\d+)?%)")
 _SCIENTIFIC = re.compile(r"\b\d+(?:\.\d+)?e[-+]?\d+\b")
 _DATE = re.compile(r"\b\d{4}-\d{2}-\d{2}\b")
-_VERSION = re.compile(r"\b\d+\.\d+\.\d+\b|\bv\d+(?:\.\d+)*\b|(?:[<>=]=|[≥≤]) ?\d+(?:\.\d+)*|\b(?:Python|python|torch|"
+_VERSION = re.compile(r"\b\d+\.\d+\.\d+\b|\bv\d+(?:\.\d+)*\b|(?:[<>=]=|[≥≤]) ?\d+(?:\.\d+)*|"
+                      r"\b(?:Python|python|torch|"
                       r"MuJoCo|mujoco(?:-mjx)?|jax(?:lib)?|JAX|brax|Brax|MJX|placo|OMPL|ompl|viser|rsl-rl(?:-lib)?|"
                       r"Chromium|chromium|numpy|scipy|version|versions)[ =]+[\d.]+")
 
@@ -119,8 +120,9 @@ _DURATION = re.compile(r"\s*(minutes?|min|hours?|h)\b")
 
 def printed_numbers(line: str) -> list[tuple[str, list[tuple[float, float, bool]]]]:
     """(as printed, its readings) of each decimal number and percentage on a line, and of each integer that counts
-    goals, falls or wins (other integers are not figures here). A reading is (value, tolerance: half the last printed digit, percentage); M and k scale the
-    value, and a number of minutes or hours may also be read as seconds, which the evidence holds."""
+    goals, falls or wins (other integers are not figures here). A reading is (value, tolerance: half the last printed
+    digit, percentage); M and k scale the value, and a number of minutes or hours may also be read as seconds, which
+    the evidence holds."""
     found = []
     for m in _NUMBER.finditer(line):
         whole, fraction, suffix = m.group(1), m.group(2) or "", m.group(3) or ""

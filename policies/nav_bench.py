@@ -92,7 +92,8 @@ def bench_navigate(scenes_dir, policy_dir, seeds: int = 5, first_seed: int = 0, 
     bar.close()
     episodes, wins = sum(r["episodes"] for r in rows), sum(r["successes"] for r in rows)
     ratios = [r["time_vs_path_at_speed"] for r in rows if r["time_vs_path_at_speed"] is not None]
-    return sealed({"scenes_dir": repo_path(scenes_dir), "policy": repo_path(policy_dir), "robot": robot, "physics": physics,
+    return sealed({"scenes_dir": repo_path(scenes_dir), "policy": repo_path(policy_dir), "robot": robot,
+                   "physics": physics,
             "seeds": list(range(first_seed, first_seed + seeds)), "speed_limit_mps": speed,
             "planner": dataclasses.asdict(follower_planner(run_config.env, planner)),
             "total": {"scenes": len(rows), "episodes": episodes, "successes": wins,

@@ -171,7 +171,8 @@ def navigate_seeds(run_dir, maps: HeightMaps, start, goal, seeds: list[int], phy
     reports = []
     for seed in seeds:
         report = _follow(vector, env, policy, checker, goal, spec, first_plan, seed, config, planner, on_step)
-        reports.append(dict(report, physics=physics, time_limit_s=round(time_limit, 2), policy=repo_path(policy.checkpoint),
+        reports.append(dict(report, physics=physics, time_limit_s=round(time_limit, 2),
+                            policy=repo_path(policy.checkpoint),
                             robot=run_config.env.robot_model,
                             speed_limit_mps=None if math.isinf(limit) else limit,
                             speed_commanded=env_config.speed_command))
