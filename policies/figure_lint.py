@@ -61,7 +61,7 @@ _JSON = re.compile(r"(?<![\w/.-])((?:[\w.-]+/)*[\w.-]+\.json)\b")
 _RUN_NAME = re.compile(r"(?<![\w/.-])([a-z0-9][a-z0-9-]*-cpu2?)\b")
 """A run named by its record's directory name, or the end of it (`raw-cpu2` for soccer-1v1-vision-raw-cpu2)."""
 _DIR = re.compile(r"\b((?:assets/(?:runs|policies|benchmarks)|tests/fixtures/runs)/[\w.-]+)")
-_NUMBER = re.compile(r"(?<![\w.\-/:+])(-?\d{1,3}(?:,\d{3})+|-?\d+)(\.\d+)?(%|M\b|k\b|x\b)?(?![\w.]*\d)")
+_NUMBER = re.compile(r"(?<![\w.\-/:])(-?\d{1,3}(?:,\d{3})+|-?\d+)(\.\d+)?(%|M\b|k\b|x\b)?(?![\w.]*\d)")
 _RANGE = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?)(?=-\d+(?:\.\d+)?(%|M\b|k\b))")
 _LISTED = re.compile(r"(?<![\w.%])(\d+(?:\.\d+)?)(?=(?:\s*/\s*\d+(?:\.\d+)?)*\s*/\s*\d+(?:\.\d+)?%)")
 _SCIENTIFIC = re.compile(r"\b\d+(?:\.\d+)?e[-+]?\d+\b")
@@ -95,14 +95,20 @@ def prose_lines(text: str) -> list[tuple[int, str]]:
     first end of a range takes the unit of the second (`91.91-101.91M`), and the numbers of a list the percent sign
     of its last (`92.7 / 95.3 / 80.0%`)."""
     text = re.sub(r"<!--.*?-->", lambda m: "\n" * m.group(0).count("\n"), text, flags=re.S)
-    out, fenced = [], False
+    out, fenced, in_code = [], False, False
     for number, line in enumerate(text.splitlines(), 1):
         if line.lstrip().startswith("```"):
             fenced = not fenced
             continue
         if fenced or line.startswith("    ") and not line.lstrip().startswith(("-", "|", "*")):
+            in_code = False
             continue
-        line = re.sub(r"`[^`]*`", " ", line)
+        if not line.strip():  # inline code ends with its paragraph at the latest
+            in_code = False
+        line = ("`" if in_code else "") + line
+        in_code = line.count("`") % 2 == 1  # inline code that goes on on the next line
+        line = re.sub(r"`[^`]*(`|$)", " ", line)
+        line = re.sub(r"\+-\s?\d[\d.]*", " ", line)  # +-0.04: a range of a setting, as before the + counted
         line = re.sub(r"\]\([^)]*\)", "]", line)
         line = _SCIENTIFIC.sub(" ", _VERSION.sub(" ", _DATE.sub(" ", line)))
         line = _RANGE.sub(lambda m: m.group(1) + m.group(2), line)  # 91.91-101.91M: both ends in millions
@@ -142,9 +148,9 @@ def printed_numbers(line: str) -> list[tuple[str, list[tuple[float, float, bool]
 
 def cited_files(page: Path, text: str, root: Path) -> list[Path]:
     """The evidence files a page names: JSONs, and the JSONs, JSON lines (training metrics) and config.yaml of the
-    directories it names."""
+    directories it names (and of their sub-directories)."""
     bases = [page.parent, root]
-    dirs = {root / d for d in _DIR.findall(text)}
+    dirs = {root / d.rstrip(".") for d in _DIR.findall(text)}  # a path ending a sentence keeps no full stop
     records = sorted(p.name for p in (root / "assets/runs").glob("*") if p.is_dir())
     for name in set(_RUN_NAME.findall(text)):
         dirs.update(root / "assets/runs" / r for r in records if r == name or r.endswith("-" + name))
@@ -159,35 +165,45 @@ def cited_files(page: Path, text: str, root: Path) -> list[Path]:
     for d in dirs:
         if d.is_dir():
             files.update(p.resolve() for p in d.glob("**/*.json"))
-            files.update(p.resolve() for p in d.glob("*.jsonl"))
-            files.update(p.resolve() for p in d.glob("config.yaml"))
+            files.update(p.resolve() for p in d.glob("**/*.jsonl"))  # runs kept in a record's sub-directories too
+            files.update(p.resolve() for p in d.glob("**/config.yaml"))
     return sorted(files)
 
 
-SHARE_KEYS = re.compile(r"rate|share|fraction|with_a_fall|success|win|ci95|interval|ratio|stood|scored")
-"""Keys whose values are shares: the only values a percentage is read against (times 100)."""
+SHARE_WORDS = frozenset({"rate", "share", "fraction", "success", "win", "wins", "ci95", "interval", "ratio", "stood",
+                         "scored"})
+"""Words of a key (split at `_`) that make its values shares: the only values a percentage is read against (times
+100): `success_rate`, `episodes_with_a_fall`, `ratio_vs_mjx`; not `iteration` or `learning_rate`."""
+NOT_SHARES = frozenset({"learning_rate"})
+"""Keys that hold a word of SHARE_WORDS and no share."""
 
 
-def _walk(node, out: dict, key: str = "") -> None:
-    """Collect the numbers under `node` into out["all"], the shares (SHARE_KEYS) also into out["shares"]."""
+def is_share(key: str) -> bool:
+    """Whether a JSON key names a share (SHARE_WORDS)."""
+    return key not in NOT_SHARES and ("with_a_fall" in key or not SHARE_WORDS.isdisjoint(key.lower().split("_")))
+
+
+def _walk(node, out: dict, where: str, key: str = "") -> None:
+    """Collect the numbers under `node` into out["all"], the shares (is_share) also into out["shares"], each as
+    (value, where it is: `FILE:KEY`)."""
     if isinstance(node, bool):
         return
     if isinstance(node, (int, float)):
         if np.isfinite(node):
-            out["all"].append(float(node))
-            if SHARE_KEYS.search(key):
-                out["shares"].append(float(node))
+            out["all"].append((float(node), f"{where}:{key}"))
+            if is_share(key):
+                out["shares"].append((float(node), f"{where}:{key}"))
         return
     if isinstance(node, dict):
         episodes = node.get("episodes") or node.get("games")
         for name, value in node.items():
-            _walk(value, out, str(name))
+            _walk(value, out, where, str(name))
             if isinstance(episodes, (int, float)) and isinstance(value, (int, float)) and not isinstance(value, bool) \
                     and (str(name).endswith(("_per_episode", "_rate")) or name == "episodes_with_a_fall"):
-                out["all"].append(float(value) * episodes)  # the count behind a share or a mean
+                out["all"].append((float(value) * episodes, f"{where}:{name} x episodes"))  # the count behind it
     elif isinstance(node, list):
         for value in node:
-            _walk(value, out, key)
+            _walk(value, out, where, key)
 
 
 def curve_ends(records: list[dict]) -> dict:
@@ -201,10 +217,38 @@ def curve_ends(records: list[dict]) -> dict:
     return {key: [v[0], v[-1], min(v), max(v), float(np.mean(v)), float(np.median(v))] for key, v in series.items()}
 
 
-def evidence_values(files: list[Path]) -> dict[str, np.ndarray]:
-    """Every number the files hold (JSON or YAML), with the counts behind their shares (`all`), and the shares among
-    them (`shares`), each sorted."""
-    values: dict[str, list[float]] = {"all": [], "shares": []}
+@dataclasses.dataclass(frozen=True)
+class Evidence:
+    """The values a section may print, sorted, each with where it comes from."""
+
+    values: np.ndarray
+    """Every number of the cited files (and the counts behind their shares), sorted."""
+    sources: list[str]
+    """Where each value is (`FILE:KEY`, `constant: what`)."""
+    shares: np.ndarray
+    """The shares among them, sorted."""
+    share_sources: list[str]
+    """Where each share is."""
+
+    @staticmethod
+    def of(pairs: list[tuple[float, str]], share_pairs: list[tuple[float, str]]) -> "Evidence":
+        pairs, share_pairs = sorted(pairs), sorted(share_pairs)
+        return Evidence(np.asarray([v for v, _ in pairs], float), [s for _, s in pairs],
+                        np.asarray([v for v, _ in share_pairs], float), [s for _, s in share_pairs])
+
+    def source(self, value: float, tolerance: float, percentage: bool) -> str | None:
+        """Where a printed reading is a value of the evidence within `tolerance`, or its magnitude is (a penalty
+        printed either way), None if nowhere; a percentage is read against the shares, times 100."""
+        if percentage:
+            return _near(self.shares, self.share_sources, abs(value) / 100.0, tolerance / 100.0)
+        return _near(self.values, self.sources, value, tolerance) or \
+            _near(self.values, self.sources, -value, tolerance)
+
+
+def evidence_values(files: list[Path], root: Path, own: list[float] = ()) -> Evidence:
+    """Every number the files hold (JSON, JSON lines of training metrics or YAML), with the counts behind their
+    shares, the global constants and the page's own (`own`)."""
+    out: dict[str, list] = {"all": [], "shares": []}
     for path in files:
         try:
             text = path.read_text()
@@ -213,22 +257,16 @@ def evidence_values(files: list[Path]) -> dict[str, np.ndarray]:
                 if path.suffix == ".jsonl" else yaml.safe_load(text)
         except (ValueError, yaml.YAMLError, OSError):
             continue
-        _walk(data, values)
-    return {"all": np.unique(np.asarray(values["all"] + list(CONSTANTS), float)),
-            "shares": np.unique(np.asarray(values["shares"] + [p / 100 for p in PERCENT_CONSTANTS], float))}
+        _walk(data, out, path.relative_to(root).as_posix() if path.is_relative_to(root) else str(path))
+    out["all"] += [(v, f"constant: {what}") for v, what in CONSTANTS.items()] + [(v, "page constant") for v in own]
+    out["shares"] += [(p / 100, f"constant: {what}") for p, what in PERCENT_CONSTANTS.items()] + \
+        [(v, "page constant") for v in own]
+    return Evidence.of(out["all"], out["shares"])
 
 
-def _near(values: np.ndarray, target: float, tolerance: float) -> bool:
+def _near(values: np.ndarray, sources: list[str], target: float, tolerance: float) -> str | None:
     i = bisect.bisect_left(values, target - tolerance)
-    return i < len(values) and values[i] <= target + tolerance
-
-
-def _matches(value: float, tolerance: float, percentage: bool, values: dict) -> bool:
-    """Whether a printed reading is a value of the evidence within `tolerance`, or its magnitude is (a penalty printed
-    either way); a percentage is read against the shares, times 100."""
-    if percentage:
-        return _near(values["shares"], abs(value) / 100.0, tolerance / 100.0)
-    return _near(values["all"], value, tolerance) or _near(values["all"], -value, tolerance)
+    return sources[i] if i < len(values) and values[i] <= target + tolerance else None
 
 
 def page_constants(text: str) -> list[float]:
@@ -250,23 +288,26 @@ def sections(text: str) -> list[tuple[int, str]]:
     return [(start, "\n".join(lines[start:end])) for start, end in zip(starts, starts[1:] + [len(lines)])]
 
 
-def lint_page(page: Path, root: Path) -> list[Finding]:
-    """The figures on `page` that no file cited in their section (or before the page's first heading) holds."""
+def page_figures(page: Path, root: Path) -> list[tuple[Finding, str | None]]:
+    """Every figure on `page`, with where the evidence cited in its section (or before the page's first heading)
+    holds it (`FILE:KEY`), None where nothing does."""
     text = page.read_text()
     parts = sections(text)
     head = parts[0][1]
     own = page_constants(text)
     out = []
     for start, section in parts:
-        values = evidence_values(cited_files(page, head + "\n" + section, root))
-        if own:
-            values = {"all": np.unique(np.concatenate([values["all"], own])),
-                      "shares": np.unique(np.concatenate([values["shares"], own]))}
+        evidence = evidence_values(cited_files(page, head + "\n" + section, root), root, own)
         for number, line in prose_lines(section):
             for printed, readings in printed_numbers(line):
-                if not any(_matches(value, tolerance, percentage, values) for value, tolerance, percentage in readings):
-                    out.append(Finding(page.relative_to(root).as_posix(), start + number, printed, line))
+                source = next(filter(None, (evidence.source(*reading) for reading in readings)), None)
+                out.append((Finding(page.relative_to(root).as_posix(), start + number, printed, line), source))
     return out
+
+
+def lint_page(page: Path, root: Path) -> list[Finding]:
+    """The figures on `page` that no file cited in their section (or before the page's first heading) holds."""
+    return [figure for figure, source in page_figures(page, root) if source is None]
 
 
 def pages(root: Path) -> list[Path]:
@@ -280,3 +321,11 @@ def lint(root: str | Path = ".", only: list[str] | None = None) -> list[Finding]
     root = Path(root).resolve()
     chosen = pages(root) if only is None else [root / p for p in only]
     return [finding for page in chosen for finding in lint_page(page, root)]
+
+
+def explain(root: str | Path = ".", only: list[str] | None = None) -> list[tuple[Finding, str | None]]:
+    """Every figure of every page (or of the pages in `only`) with the evidence it matched, for a reader to judge
+    whether the match is the figure's source or a coincidence."""
+    root = Path(root).resolve()
+    chosen = pages(root) if only is None else [root / p for p in only]
+    return [pair for page in chosen for pair in page_figures(page, root)]

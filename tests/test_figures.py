@@ -11,16 +11,13 @@ import yaml
 
 from legged.cli import main
 from policies.cards import FIGURES_BEGIN, FIGURES_END, checked_reports, shipped_cards
-from policies.figure_lint import lint
+from policies.figure_lint import explain, lint
 from policies.policy_io import load_policy
 from policies.provenance import checkpoint_record, read_sealed, sealed
 
 ROOT = Path(__file__).resolve().parents[1]
 RUN = "tests/fixtures/runs/go1-flat-brax-cpu2"
 OTHER = "tests/fixtures/runs/rough-dagger-cpu2"
-CHECKED_PAGES = ["README.md", "docs/policies.md"] + \
-    [str(p.relative_to(ROOT) / "CARD.md") for p in shipped_cards(ROOT / "assets/policies")]
-"""Pages whose every figure is checked against the evidence they cite (the others: `legged lint-figures`)."""
 
 
 def _card(run: Path, figures: list[str]) -> None:
@@ -118,8 +115,23 @@ def test_the_linter_finds_figures_no_cited_file_holds(tmp_path):
     assert [f.text for f in lint(tmp_path, ["docs/page.md"])] == ["68%", "0.049", "23", "0.4"]
 
 
-def test_the_checked_pages_hold_only_figures_their_evidence_has():
-    findings = lint(ROOT, CHECKED_PAGES)
+def test_the_linter_reads_shares_code_spans_paths_and_signed_figures_as_a_reader_would(tmp_path):
+    run = tmp_path / "assets" / "runs" / "walk"
+    run.mkdir(parents=True)
+    (run / "eval.json").write_text(json.dumps({"iteration": 1.0, "learning_rate": 0.5, "goal_rate": 0.25,
+                                               "trained_steps": 10_800_000}))
+    page = tmp_path / "README.md"
+    page.write_text("Run assets/runs/walk. It scores 25% (`goal_rate`), +10.8M steps, vy +-0.04 m/s, `a\n"
+                    "command 0.123 that wraps`.\n")
+    assert lint(tmp_path, ["README.md"]) == []
+    assert [(f.text, source) for f, source in explain(tmp_path, ["README.md"])] == [
+        ("25%", "assets/runs/walk/eval.json:goal_rate"), ("10.8M", "assets/runs/walk/eval.json:trained_steps")]
+    page.write_text(page.read_text().replace("25%", "100%").replace("+10.8M", "+10.9M") + "And 50%.\n")
+    assert [f.text for f in lint(tmp_path, ["README.md"])] == ["100%", "10.9M", "50%"]  # not iteration, learning_rate
+
+
+def test_every_page_holds_only_figures_its_evidence_has():
+    findings = lint(ROOT)
     assert not findings, "figures no cited file holds:\n" + "\n".join(map(str, findings))
 
 

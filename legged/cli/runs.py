@@ -96,8 +96,13 @@ def cmd_card(args) -> int:
 
 def cmd_lint_figures(args) -> int:
     """`legged lint-figures`: the figures on the pages that no file they cite holds (exit 1 if any)."""
-    from policies.figure_lint import lint  # reads JSON only, but lives with the cards
+    from policies.figure_lint import explain, lint  # reads JSON only, but lives with the cards
 
+    if args.explain:
+        figures = explain(".", args.page or None)
+        for figure, source in figures:
+            print(f"{figure.page}:{figure.line}: {figure.text:>9}  <- {source or 'NOTHING'}")
+        return 1 if any(source is None for _, source in figures) else 0
     findings = lint(".", args.page or None)
     if args.json:
         print(json.dumps([dataclasses.asdict(f) for f in findings]))
@@ -173,4 +178,6 @@ def add_run_commands(sub) -> None:
                                              "cards that no JSON or run the page cites holds (exit 1 if any)")
     lf.add_argument("page", nargs="*", help="pages to check, relative to the repository (default: all of them)")
     lf.add_argument("--json", action="store_true", help="one JSON list of findings")
+    lf.add_argument("--explain", action="store_true", help="every figure with the file and key it matched (or "
+                                                           "NOTHING), to tell a figure's source from a coincidence")
     lf.set_defaults(fn=cmd_lint_figures)
