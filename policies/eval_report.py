@@ -8,6 +8,8 @@ import dataclasses
 from legged.robots.models import model_path
 from legged.tasks import task_entry
 from legged.worlds.levels import LEVELS
+from policies.config import apply_overrides
+from policies.config_io import ConfigError
 from policies.environments import build_env, soccer_opponent
 from policies.evaluate import (HELD_OUT_SEED_OFFSET, confined_eval_config, evaluate, held_out, latent_probe,
                                nominal_config, on_robot, ood_config, paired_goal_ratio, robot_ratios,
@@ -57,6 +59,9 @@ class EvalRequest:
     """A distilled soccer student: also play its teacher in the same games."""
     compare_pilot: bool = False
     """A piloted vision student: also play its pilot at the truth in the same games."""
+    env_set: tuple[str, ...] = ()
+    """Changes to the evaluated environment, `env.PATH=VALUE` as `legged train --set` takes them
+    (`env.randomization.elliptic_share=null`): the setting's effect on a trained policy."""
     robot: str = "project"
     """The robot model the policy runs on."""
     compare_robots: tuple[str, ...] = ()
@@ -81,6 +86,8 @@ def evaluation_report(request: EvalRequest) -> dict:
         report["ood"] = True
     if request.nominal:
         report["nominal"] = True
+    if request.env_set:
+        report["env_set"] = list(request.env_set)
     if request.compare_robots:
         report["robots"] = {r: _evaluate_run(request, c, policy) for r, c in configs.items()}
         report["ratios"] = robot_ratios(report["robots"], robots[0])
@@ -135,10 +142,26 @@ def check_request(request: EvalRequest, config) -> list[str]:
     if request.compare_robots and (request.robot != "project"
                                    or len(set(request.compare_robots)) < len(request.compare_robots)):
         raise ValueError("--compare-robots names each model once, and replaces --robot")
+    changed_env(config, config.env, request.env_set)  # a bad change fails here, in one line
     robots = list(request.compare_robots or [request.robot])
     for robot in robots:  # a model that cannot be used fails here, before a policy is loaded or a scene compiled
         on_robot(config, robot, request.physics)
     return robots
+
+
+def changed_env(config, env_config, changes: tuple[str, ...]):
+    """`env_config` with `legged eval --set`'s changes (`env.PATH=VALUE`); a change outside `env.` or naming no
+    field is a ValueError in one line."""
+    if not changes:
+        return env_config
+    wrong = [c for c in changes if not c.startswith("env.")]
+    if wrong:
+        raise ValueError(f"legged eval --set changes the evaluated environment only (env.PATH=VALUE), got "
+                         f"{', '.join(wrong)}")
+    try:
+        return apply_overrides(dataclasses.replace(config, env=env_config), list(changes)).env
+    except ConfigError as e:
+        raise ValueError(f"--set: {e}") from None
 
 
 def _evaluate_run(request: EvalRequest, config, policy) -> dict:
@@ -157,6 +180,7 @@ def _evaluate_run(request: EvalRequest, config, policy) -> dict:
             env_config = ood_config(env_config)
         elif request.nominal:
             env_config = nominal_config(env_config)
+        env_config = changed_env(config, env_config, request.env_set)
         env = build_env(dataclasses.replace(config, env=env_config))
         check_policy(policy, env)
         if config.soccer.pilot:
@@ -185,6 +209,7 @@ def _evaluate_run(request: EvalRequest, config, policy) -> dict:
         for level in request.difficulty if request.difficulty is not None else config.env.difficulties:
             env_config = confined_eval_config(config.env, level, request.episodes, request.world_seed)
             env_config = nominal_config(env_config) if request.nominal else env_config
+            env_config = changed_env(config, env_config, request.env_set)
             env = build_env(dataclasses.replace(config, env=env_config), progress=request.progress)
             check_policy(policy, env)
             finals = evaluate(env, policy, request.episodes, request.seed, request.physics,

@@ -157,7 +157,7 @@ LEGGED_ORDER = [
               "legged.envs.math")),
     ("environments", ("legged.envs", "legged.soccer")),
     ("skills", ("legged.skills",)),
-    ("tasks", ("legged.tasks", "legged.bench", "legged.physics_cost", "legged.soccer.bench",
+    ("tasks", ("legged.tasks", "legged.bench", "legged.physics_cost", "legged.setting_cost", "legged.soccer.bench",
                "legged.soccer.parallel_env", "legged.peers")),
     ("cli", ("legged.cli",)),
 ]
@@ -170,7 +170,7 @@ base. Placed apart from their folders: legged.envs.math (rotation helpers that i
 of the project, read by the sensors too) in the base; legged.soccer.bench
 (the soccer throughput benchmark, built on legged.bench) and legged.soccer.parallel_env (the PettingZoo adapter,
 which builds its game through the registry) with the tasks. Beside the registry sit the benchmarks built on it,
-legged/bench.py and legged/physics_cost.py, and legged/peers (MuJoCo Playground's timing script, run with the peer's
+legged/bench.py, legged/physics_cost.py and legged/setting_cost.py, and legged/peers (MuJoCo Playground's timing script, run with the peer's
 own Python: it imports
 nothing of legged)."""
 
@@ -248,8 +248,8 @@ def test_the_groups_place_modules_by_their_most_specific_entry():
         [0, 2, 4, 6]
 
 
-LAZY_IMPORTS = 97
-"""Import statements inside functions that import a project module, today: the command line's (legged.cli, 65:
+LAZY_IMPORTS = 98
+"""Import statements inside functions that import a project module, today: the command line's (legged.cli, 66:
 each command imports what it runs) and the dashboard's checks' (web.source), which answer before torch and the
 task registry load; the registry's soccer environments (legged.tasks), loaded when a soccer task is built; Brax's
 trainer (policies.training), loaded by Brax runs only; the placo solver and JAX in the gait table's open-loop

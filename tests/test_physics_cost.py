@@ -2,6 +2,8 @@
 is measured from the same states under the same controls. (Its figures are measured, not asserted:
 assets/benchmarks/.)"""
 
+import dataclasses
+
 import mujoco
 import numpy as np
 import pytest
@@ -68,3 +70,29 @@ def test_a_variant_is_timed_from_the_given_states_under_the_given_controls(model
     out = _time_variant(model, [data], ctrls, n_substeps=4, threads=1, seconds=0.05)
     assert out["env_steps_per_s"] > 0 and out["finite"]
     assert data.time == 0.0  # the state handed in is left as it was
+
+
+def test_each_setting_change_edits_what_it_names_of_a_tasks_config():
+    from legged.setting_cost import AS_TRAINED, CHANGES, changes_named
+    from legged.tasks import task_entry
+
+    flat, confined = task_entry("go1-flat").config, task_entry("confined-waypoints").config
+    changed = {c.name: c.edit(confined) for c in CHANGES}
+    r = confined.randomization
+    assert r.enabled and r.elliptic_share and r.contact_spin and r.contact_margin and r.contact_softness  # as trains
+    assert changed["as-trained"] == confined
+    assert changed["no-cone-draws"].randomization == dataclasses.replace(r, elliptic_share=None, impratio=None)
+    assert changed["feet-condim-3"].randomization == dataclasses.replace(r, contact_spin=None)
+    assert changed["no-margin"].randomization == dataclasses.replace(r, contact_margin=None)
+    assert changed["model-softness"].randomization == dataclasses.replace(r, contact_softness=None,
+                                                                           contact_timeconst=None)
+    assert not changed["no-randomisation"].randomization.enabled
+    assert changed["tunnels"].levels is None
+    levels = changed["heights-10cm"].levels
+    assert levels.resolution == levels.tunnels.resolution == 0.1
+    assert {c.name for c in CHANGES if c.applies(flat)} == {c.name for c in CHANGES} - {"tunnels", "heights-10cm"}
+    assert all(c.applies(confined) for c in CHANGES)
+    picked = changes_named(["tunnels", "no-margin", "tunnels"])
+    assert [c.name for c in picked] == ["as-trained", "tunnels", "no-margin"] and picked[0] is AS_TRAINED
+    with pytest.raises(ValueError, match="unknown setting change.*cheap.*choose from as-trained"):
+        changes_named(["cheap"])

@@ -1,4 +1,4 @@
-"""The command line's benchmarks: `legged bench env|train|physics|soak|soccer|encoder` (and `bench plan` and
+"""The command line's benchmarks: `legged bench env|train|physics|settings|soak|soccer|encoder` (and `bench plan` and
 `bench navigate`, from legged.cli.nav)."""
 
 from __future__ import annotations
@@ -87,6 +87,17 @@ def cmd_bench_physics(args) -> int:
     return _print_records(records, args.json, print_cost_table)
 
 
+def cmd_bench_settings(args) -> int:
+    """`legged bench settings`: the cost of each setting of tasks' configs under their randomisation, side by side."""
+    from legged.setting_cost import changes_named, print_setting_table, setting_cost
+
+    changes = changes_named(args.changes)  # unknown names -> one clear line before anything is built
+    progress = None if args.quiet else (lambda msg: print(f"[bench] {msg}", file=sys.stderr, flush=True))
+    records = setting_cost(args.task, changes, batch=args.batch, threads=args.threads, seconds=args.seconds,
+                           repeats=args.repeats, seed=args.seed, progress=progress)
+    return _print_records(records, args.json, print_setting_table)
+
+
 def cmd_bench_soccer(args) -> int:
     """`legged bench soccer`: soccer env steps per second beside the peers."""
     from legged.soccer.bench import bench_soccer, print_soccer_table
@@ -164,6 +175,24 @@ def add_bench_commands(sub) -> None:
     bp.add_argument("--json", action="store_true", help="print a JSON list, one object per task and variant")
     bp.add_argument("--quiet", action="store_true", help="no progress messages")
     bp.set_defaults(fn=cmd_bench_physics)
+    bg = bsub.add_parser("settings", help="what each setting of a task's config costs its physics under its "
+                                          "randomisation (cone draws, feet condim, margin, softness, level worlds), "
+                                          "side by side, with the ratio to go1-flat where it runs too")
+    bg.add_argument("task", type=task_names, help="comma-separated tasks, interleaved in every round")
+    bg.add_argument("--changes", type=lambda s: [v for v in s.split(",") if v], default=None,
+                    help="comma-separated changes (default: all that apply; as-trained always measured): as-trained, "
+                         "no-cone-draws, feet-condim-3, no-margin, model-softness, no-randomisation, tunnels, "
+                         "heights-10cm")
+    bg.add_argument("--batch", type=bounded(int, 1, 65536), default=256, help="simulations stepped together")
+    bg.add_argument("--threads", type=bounded(int, 1, 1024), default=2, help="threads of the C engine")
+    bg.add_argument("--seconds", type=bounded(float, 0.1, 3600.0), default=5.0,
+                    help="timed seconds per change and round")
+    bg.add_argument("--repeats", type=bounded(int, 1, 100), default=3,
+                    help="rounds, every change interleaved in each; each figure is the median round's")
+    bg.add_argument("--seed", type=SEED, default=0)
+    bg.add_argument("--json", action="store_true", help="print a JSON list, one object per task and change")
+    bg.add_argument("--quiet", action="store_true", help="no progress messages")
+    bg.set_defaults(fn=cmd_bench_settings)
     sk = bsub.add_parser("soak", help="random and extreme actions under randomisation: non-finite values and "
                                       "divergences that reach the learner")
     sk.add_argument("--tasks", type=task_names, default=["confined-waypoints", "soccer-1v1"],

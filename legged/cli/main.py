@@ -70,7 +70,8 @@ def eval_request(args):
                        difficulty=None if args.difficulty is None else tuple(args.difficulty),
                        world_seed=args.world_seed, opponent=args.opponent, teammate=args.teammate, ood=args.ood,
                        nominal=args.nominal, oracle=tuple(args.oracle), pilot=args.pilot, tracker=args.tracker,
-                       compare_teacher=args.compare_teacher, compare_pilot=args.compare_pilot, robot=args.robot,
+                       compare_teacher=args.compare_teacher, compare_pilot=args.compare_pilot,
+                       env_set=tuple(getattr(args, "set", None) or ()), robot=args.robot,
                        compare_robots=tuple(args.compare_robots or ()), progress=not args.quiet)
 
 
@@ -240,6 +241,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "0.7-0.8, pushes 1.5x stronger (Go1 tasks)")
     ev.add_argument("--nominal", action="store_true",
                     help="each robot model as it is: the run's domain randomisation and observation noise off")
+    ev.add_argument("--set", action="append", default=[], metavar="env.PATH=VALUE",
+                    help="change the evaluated environment (repeatable), as `legged train --set` takes it: "
+                         "env.randomization.elliptic_share=null evaluates without the friction-cone draws")
     ev.add_argument("--oracle", type=lambda v: [p for p in v.split(",") if p], default=[], metavar="ball,own_goal,...",
                     help="diagnostics: a vision player that estimates the game steers by the truth for these parts")
     ev.add_argument("--pilot", default=None, metavar="teacher|RUN|none",
