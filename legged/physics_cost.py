@@ -49,6 +49,22 @@ def _no_eulerdamp(model: mujoco.MjModel) -> None:
     model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP)
 
 
+def _other_ccd(model: mujoco.MjModel) -> None:
+    model.opt.disableflags ^= int(mujoco.mjtDisableBit.mjDSBL_NATIVECCD)
+
+
+def _skip_pairs(named: Callable[[str, str], bool]) -> Callable[[mujoco.MjModel], None]:
+    """Contact pairs whose geoms' names satisfy `named` never reach the narrow phase: a margin far below zero fails
+    their bounding-volume test (a diagnostic of what those pairs cost; the task needs them)."""
+    def edit(model: mujoco.MjModel) -> None:
+        for i in range(model.npair):
+            g1, g2 = (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, int(g)) or ""
+                      for g in (model.pair_geom1[i], model.pair_geom2[i]))
+            if named(g1, g2):
+                model.pair_margin[i] = -1e3
+    return edit
+
+
 @dataclasses.dataclass(frozen=True)
 class Variant:
     """One change of a model's physics settings."""
@@ -74,19 +90,33 @@ VARIANTS = (
     Variant("no-eulerdamp", "joint damping integrated explicitly (mjDSBL_EULERDAMP)", _no_eulerdamp),
     Variant("sparse-jacobian", "sparse constraint Jacobian (the model's: auto)",
             _set_opt(jacobian=mujoco.mjtJacobian.mjJAC_SPARSE)),
+    Variant("other-ccd", "the other convex collider (MuJoCo's native GJK/EPA <-> libccd's MPR; the confined scenes "
+                         "use libccd: the native one wedged feet in height fields)", _other_ccd),
+    Variant("ccd-loose", "convex collisions to 1 mm in at most 10 iterations (the model's: 1e-6 m, 35)",
+            _set_opt(ccd_tolerance=1e-3, ccd_iterations=10)),
+    Variant("no-ceiling-pairs", "diagnostic: the ceiling's contact pairs skipped (what they cost)",
+            _skip_pairs(lambda a, b: "ceiling" in (a, b))),
+    Variant("no-trunk-pairs", "diagnostic: the trunk's contact pairs with the terrain skipped (what they cost)",
+            _skip_pairs(lambda a, b: a.startswith("trunk") or b.startswith("trunk"))),
 )
 """Every variant the benchmark knows, the model as it trains first."""
 
 
-def variants_named(names: list[str] | None) -> list[Variant]:
-    """The variants of `names` (None: all), as-trained always first; an unknown name is one clear error."""
+def picked(every: tuple, names: list[str] | None, kind: str) -> list:
+    """The items of `every` (each with a `name`, the reference first) named in `names` (None: all), the reference
+    always first and each once; an unknown name is one clear error naming the `kind` of item."""
     if names is None:
-        return list(VARIANTS)
-    known = {v.name: v for v in VARIANTS}
+        return list(every)
+    known = {item.name: item for item in every}
     unknown = [n for n in names if n not in known]
     if unknown:
-        raise ValueError(f"unknown physics variant(s) {', '.join(unknown)}; choose from {', '.join(known)}")
-    return [AS_TRAINED] + [known[n] for n in dict.fromkeys(names) if n != AS_TRAINED.name]
+        raise ValueError(f"unknown {kind}(s) {', '.join(unknown)}; choose from {', '.join(known)}")
+    return [every[0]] + [known[n] for n in dict.fromkeys(names) if n != every[0].name]
+
+
+def variants_named(names: list[str] | None) -> list[Variant]:
+    """The variants of `names` (None: all), as-trained always first; an unknown name is one clear error."""
+    return picked(VARIANTS, names, "physics variant")
 
 
 def variant_model(model: mujoco.MjModel, variant: Variant) -> mujoco.MjModel:

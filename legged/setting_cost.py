@@ -20,6 +20,7 @@ import numpy as np
 
 from legged.bench import machine, physics_profile, random_controls, step_rate
 from legged.envs.native import NativeEnvs, check_threads
+from legged.physics_cost import picked
 from legged.tasks import learner_env, make, task_entry
 
 
@@ -71,8 +72,8 @@ CHANGES = (
                             "draws)", _randomization(elliptic_share=None, impratio=None), _drawn("elliptic_share")),
     Change("feet-condim-3", "the feet's floor pairs condim 3 (no drawn spin and roll friction, condim 6)",
            _randomization(contact_spin=None), _drawn("contact_spin")),
-    Change("no-margin", "the feet's contact margin the model's own (no drawn 0-2 mm)", _randomization(contact_margin=None),
-           _drawn("contact_margin")),
+    Change("no-margin", "the feet's contact margin the model's own (no drawn 0-2 mm)",
+           _randomization(contact_margin=None), _drawn("contact_margin")),
     Change("model-softness", "the feet's solimp and time constant the model's own (no drawn softness)",
            _randomization(contact_softness=None, contact_timeconst=None), _drawn("contact_softness")),
     Change("no-randomisation", "the randomisation off: every robot the nominal model",
@@ -87,13 +88,7 @@ CHANGES = (
 
 def changes_named(names: list[str] | None) -> list[Change]:
     """The changes of `names` (None: all), as-trained always first; an unknown name is one clear error."""
-    if names is None:
-        return list(CHANGES)
-    known = {c.name: c for c in CHANGES}
-    unknown = [n for n in names if n not in known]
-    if unknown:
-        raise ValueError(f"unknown setting change(s) {', '.join(unknown)}; choose from {', '.join(known)}")
-    return [AS_TRAINED] + [known[n] for n in dict.fromkeys(names) if n != AS_TRAINED.name]
+    return picked(CHANGES, names, "setting change")
 
 
 def _mean_profile(natives: NativeEnvs, sims: int, steps: int) -> dict:
@@ -166,5 +161,6 @@ def print_setting_table(records: list[dict]) -> None:
         flat = f"  {r['ratio_vs_go1_flat']:4.2f}x go1-flat" if "ratio_vs_go1_flat" in r else ""
         print(f"{r['task']:20s} {r['change']:16s} {r['env_steps_per_s']:9,.0f} env-steps/s "
               f"{r['ratio_vs_as_trained']:5.2f}x  step {p['step_us']:5.1f} us (constraint {p['constraint_us']:4.1f}, "
-              f"collision {p['pos_collision_us']:4.1f})  contacts {p['contacts']:5.1f}  rows {p['constraint_rows']:5.1f}"
+              f"collision {p['pos_collision_us']:4.1f})  contacts {p['contacts']:5.1f}  "
+              f"rows {p['constraint_rows']:5.1f}"
               f"  iterations {p['solver_iterations']:4.2f}{flat}" + ("" if r["finite"] else "  NOT FINITE"))

@@ -96,3 +96,33 @@ def test_each_setting_change_edits_what_it_names_of_a_tasks_config():
     assert [c.name for c in picked] == ["as-trained", "tunnels", "no-margin"] and picked[0] is AS_TRAINED
     with pytest.raises(ValueError, match="unknown setting change.*cheap.*choose from as-trained"):
         changes_named(["cheap"])
+
+
+def test_skipped_pairs_never_touch_and_the_others_still_do():
+    xml = """<mujoco><worldbody><geom name="floor" type="plane" size="1 1 0.1"/>
+    <geom name="ceiling" type="box" size="1 1 0.05" pos="0 0 0.3"/>
+    <body pos="0 0 0.05"><freejoint/><geom name="trunk_mid" size="0.06"/></body>
+    <body pos="0.5 0 0.02"><freejoint/><geom name="FR" size="0.02"/></body></worldbody>
+    <contact><pair geom1="floor" geom2="trunk_mid"/><pair geom1="ceiling" geom2="trunk_mid"/>
+    <pair geom1="floor" geom2="FR"/></contact></mujoco>"""
+    model = mujoco.MjModel.from_xml_string(xml)
+    model.geom_contype[:] = model.geom_conaffinity[:] = 0  # the pairs alone
+    touching = {}
+    for name in ("as-trained", "no-ceiling-pairs", "no-trunk-pairs"):
+        edited = variant_model(model, named(name))
+        data = mujoco.MjData(edited)
+        mujoco.mj_forward(edited, data)
+        touching[name] = sorted(mujoco.mj_id2name(edited, mujoco.mjtObj.mjOBJ_GEOM, int(c.geom2))
+                                for c in data.contact[:data.ncon])
+    assert touching == {"as-trained": ["FR", "trunk_mid"], "no-ceiling-pairs": ["FR", "trunk_mid"],
+                        "no-trunk-pairs": ["FR"]}
+    assert variant_model(model, named("no-ceiling-pairs")).pair_margin[1] < -1 and \
+        variant_model(model, named("no-ceiling-pairs")).pair_margin[[0, 2]].max() == 0
+    loose = variant_model(model, named("ccd-loose")).opt
+    assert loose.ccd_tolerance == pytest.approx(1e-3) and loose.ccd_iterations == 10
+
+
+def test_the_other_convex_collider_is_the_flag_flipped(model):
+    flag = int(mujoco.mjtDisableBit.mjDSBL_NATIVECCD)
+    assert variant_model(model, named("other-ccd")).opt.disableflags & flag
+    assert not variant_model(variant_model(model, named("other-ccd")), named("other-ccd")).opt.disableflags & flag

@@ -98,6 +98,19 @@ def cmd_bench_settings(args) -> int:
     return _print_records(records, args.json, print_setting_table)
 
 
+def _side_by_side_options(parser, batch: int, what: str) -> None:
+    """The options of the benchmarks that time settings side by side (`bench physics`, `bench settings`)."""
+    parser.add_argument("--batch", type=bounded(int, 1, 65536), default=batch, help="simulations stepped together")
+    parser.add_argument("--threads", type=bounded(int, 1, 1024), default=2, help="threads of the C engine")
+    parser.add_argument("--seconds", type=bounded(float, 0.1, 3600.0), default=5.0,
+                        help=f"timed seconds per {what} and round")
+    parser.add_argument("--repeats", type=bounded(int, 1, 100), default=3,
+                        help=f"rounds, every {what} interleaved in each; each figure is the median round's")
+    parser.add_argument("--seed", type=SEED, default=0)
+    parser.add_argument("--json", action="store_true", help=f"print a JSON list, one object per task and {what}")
+    parser.add_argument("--quiet", action="store_true", help="no progress messages")
+
+
 def cmd_bench_soccer(args) -> int:
     """`legged bench soccer`: soccer env steps per second beside the peers."""
     from legged.soccer.bench import bench_soccer, print_soccer_table
@@ -164,16 +177,9 @@ def add_bench_commands(sub) -> None:
     bp.add_argument("task", type=task_names, help="comma-separated tasks, measured one after the other")
     bp.add_argument("--variants", type=lambda s: [v for v in s.split(",") if v], default=None,
                     help="comma-separated variants (default: all; as-trained always measured): as-trained, cg, pgs, "
-                         "iterations-1, other-cone, condim-3, no-frictionloss, no-eulerdamp, sparse-jacobian")
-    bp.add_argument("--batch", type=bounded(int, 1, 65536), default=1024, help="simulations stepped together")
-    bp.add_argument("--threads", type=bounded(int, 1, 1024), default=2, help="threads of the C engine")
-    bp.add_argument("--seconds", type=bounded(float, 0.1, 3600.0), default=5.0,
-                    help="timed seconds per variant and round")
-    bp.add_argument("--repeats", type=bounded(int, 1, 100), default=3,
-                    help="rounds, the variants interleaved in each; each figure is the median round's")
-    bp.add_argument("--seed", type=SEED, default=0)
-    bp.add_argument("--json", action="store_true", help="print a JSON list, one object per task and variant")
-    bp.add_argument("--quiet", action="store_true", help="no progress messages")
+                         "iterations-1, other-cone, condim-3, no-frictionloss, no-eulerdamp, sparse-jacobian, "
+                         "other-ccd, ccd-loose, no-ceiling-pairs, no-trunk-pairs")
+    _side_by_side_options(bp, batch=1024, what="variant")
     bp.set_defaults(fn=cmd_bench_physics)
     bg = bsub.add_parser("settings", help="what each setting of a task's config costs its physics under its "
                                           "randomisation (cone draws, feet condim, margin, softness, level worlds), "
@@ -183,15 +189,7 @@ def add_bench_commands(sub) -> None:
                     help="comma-separated changes (default: all that apply; as-trained always measured): as-trained, "
                          "no-cone-draws, feet-condim-3, no-margin, model-softness, no-randomisation, tunnels, "
                          "heights-10cm")
-    bg.add_argument("--batch", type=bounded(int, 1, 65536), default=256, help="simulations stepped together")
-    bg.add_argument("--threads", type=bounded(int, 1, 1024), default=2, help="threads of the C engine")
-    bg.add_argument("--seconds", type=bounded(float, 0.1, 3600.0), default=5.0,
-                    help="timed seconds per change and round")
-    bg.add_argument("--repeats", type=bounded(int, 1, 100), default=3,
-                    help="rounds, every change interleaved in each; each figure is the median round's")
-    bg.add_argument("--seed", type=SEED, default=0)
-    bg.add_argument("--json", action="store_true", help="print a JSON list, one object per task and change")
-    bg.add_argument("--quiet", action="store_true", help="no progress messages")
+    _side_by_side_options(bg, batch=256, what="change")
     bg.set_defaults(fn=cmd_bench_settings)
     sk = bsub.add_parser("soak", help="random and extreme actions under randomisation: non-finite values and "
                                       "divergences that reach the learner")
