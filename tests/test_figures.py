@@ -85,6 +85,14 @@ def test_every_shipped_card_and_table_is_as_its_jsons_have_them():
     assert main(["card", "--summary", "--check"]) == 0
 
 
+def test_a_shipped_policy_keeps_only_the_jsons_its_card_checks():
+    """Every JSON beside a card with a header is one the card names (and so is checked for its checkpoint): a page
+    citing assets/policies/NAME/FILE.json cites a sealed evaluation of that policy."""
+    for run in shipped_cards(ROOT / "assets/policies"):
+        named = yaml.safe_load((run / "CARD.md").read_text().split("<!-- card")[1].split("-->")[0])["figures"]
+        assert sorted(p.name for p in run.glob("*.json")) == sorted(named), run.name
+
+
 def test_soccer_jsons_count_the_falls_their_reward_paid_for():
     """For every soccer evaluation a card cites: the fall term of the reward over its weight is the falls counted."""
     checked = 0
