@@ -95,16 +95,15 @@ def _mean_profile(natives: NativeEnvs, sims: int, steps: int) -> dict:
     """MuJoCo's timers and constraint counts (legged.bench.physics_profile) averaged over the first `sims`
     simulations of a batch, each on its own randomised model from its current state."""
     batch = natives.physics.batch
-    profiles = []
+    profiles, elliptic = [], []
     for i in range(min(sims, batch.nsim)):
         model, data = batch.get_model(i), batch.get_data(i)
         mujoco.mj_forward(model, data)
         profiles.append(physics_profile(model, [data], steps))
+        elliptic.append(model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC)
     numeric = [k for k, v in profiles[0].items() if isinstance(v, (int, float)) and not isinstance(v, bool)]
     out = {k: round(float(np.mean([p[k] for p in profiles])), 2) for k in numeric}
-    cones = [int(batch.get_model(i).opt.cone) for i in range(min(sims, batch.nsim))]
-    return {**out, "elliptic_share": round(float(np.mean([c == mujoco.mjtCone.mjCONE_ELLIPTIC for c in cones])), 3),
-            "sims": len(profiles)}
+    return {**out, "elliptic_share": round(float(np.mean(elliptic)), 3), "sims": len(profiles)}
 
 
 def setting_cost(tasks: list[str], changes: list[Change] | None = None, batch: int = 256, threads: int = 2,

@@ -82,7 +82,8 @@ def on_robot(config, robot: str, physics: str | None = None):
 
 
 RATIO_FIGURES = ("tracking_error_mps", "falls_per_episode", "episodes_with_a_fall", "episode_return",
-                 "goals_for_per_episode", "goals_against_per_episode", "win_rate", "success_rate", "time_to_goal_s", "collisions_per_episode")
+                 "goals_for_per_episode", "goals_against_per_episode", "win_rate", "success_rate", "time_to_goal_s",
+                 "collisions_per_episode")
 """The figures `legged eval --compare-robots` gives as ratios to the first robot model's."""
 
 

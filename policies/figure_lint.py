@@ -305,27 +305,21 @@ def page_figures(page: Path, root: Path) -> list[tuple[Finding, str | None]]:
     return out
 
 
-def lint_page(page: Path, root: Path) -> list[Finding]:
-    """The figures on `page` that no file cited in their section (or before the page's first heading) holds."""
-    return [figure for figure, source in page_figures(page, root) if source is None]
-
-
 def pages(root: Path) -> list[Path]:
     """Every page the linter reads."""
     found = sorted({p for pattern in PAGES for p in root.glob(pattern)})
     return [p for p in found if p.relative_to(root).as_posix() not in SKIPPED]
 
 
-def lint(root: str | Path = ".", only: list[str] | None = None) -> list[Finding]:
-    """The findings of every page (or of the pages in `only`, relative to `root`)."""
-    root = Path(root).resolve()
-    chosen = pages(root) if only is None else [root / p for p in only]
-    return [finding for page in chosen for finding in lint_page(page, root)]
-
-
 def explain(root: str | Path = ".", only: list[str] | None = None) -> list[tuple[Finding, str | None]]:
-    """Every figure of every page (or of the pages in `only`) with the evidence it matched, for a reader to judge
-    whether the match is the figure's source or a coincidence."""
+    """Every figure of every page (or of the pages in `only`, relative to `root`) with the evidence it matched
+    (None: nothing), for a reader to judge whether the match is the figure's source or a coincidence."""
     root = Path(root).resolve()
     chosen = pages(root) if only is None else [root / p for p in only]
     return [pair for page in chosen for pair in page_figures(page, root)]
+
+
+def lint(root: str | Path = ".", only: list[str] | None = None) -> list[Finding]:
+    """The findings of every page (or of the pages in `only`): the figures no file cited in their section (or
+    before the page's first heading) holds."""
+    return [figure for figure, source in explain(root, only) if source is None]

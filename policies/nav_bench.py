@@ -92,16 +92,15 @@ def bench_navigate(scenes_dir, policy_dir, seeds: int = 5, first_seed: int = 0, 
     bar.close()
     episodes, wins = sum(r["episodes"] for r in rows), sum(r["successes"] for r in rows)
     ratios = [r["time_vs_path_at_speed"] for r in rows if r["time_vs_path_at_speed"] is not None]
+    total = {"scenes": len(rows), "episodes": episodes, "successes": wins, "success_rate": round(wins / episodes, 4),
+             "success_interval_95": wilson_interval(wins, episodes),
+             "worst_scene_success": min(r["success_rate"] for r in rows),
+             "median_time_vs_path_at_speed": _median(ratios),
+             "p95_speed_mps": round(float(np.percentile(pooled, 95)), 3) if pooled else 0.0}
     return sealed({"scenes_dir": repo_path(scenes_dir), "policy": repo_path(policy_dir), "robot": robot,
-                   "physics": physics,
-            "seeds": list(range(first_seed, first_seed + seeds)), "speed_limit_mps": speed,
-            "planner": dataclasses.asdict(follower_planner(run_config.env, planner)),
-            "total": {"scenes": len(rows), "episodes": episodes, "successes": wins,
-                      "success_rate": round(wins / episodes, 4), "success_interval_95": wilson_interval(wins, episodes),
-                      "worst_scene_success": min(r["success_rate"] for r in rows),
-                      "median_time_vs_path_at_speed": _median(ratios),
-                      "p95_speed_mps": round(float(np.percentile(pooled, 95)), 3) if pooled else 0.0},
-            "scenes": rows}, *follower_provenance(policy_dir, robot))
+                   "physics": physics, "seeds": list(range(first_seed, first_seed + seeds)), "speed_limit_mps": speed,
+                   "planner": dataclasses.asdict(follower_planner(run_config.env, planner)), "total": total,
+                   "scenes": rows}, *follower_provenance(policy_dir, robot))
 
 
 def print_table(report: dict) -> None:

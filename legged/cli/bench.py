@@ -98,8 +98,13 @@ def cmd_bench_settings(args) -> int:
     return _print_records(records, args.json, print_setting_table)
 
 
-def _side_by_side_options(parser, batch: int, what: str) -> None:
-    """The options of the benchmarks that time settings side by side (`bench physics`, `bench settings`)."""
+def _side_by_side_parser(bsub, name: str, fn, batch: int, what: str, help: str, names: str) -> None:
+    """`bench physics` and `bench settings`: tasks, the variants or changes to time (`--variants`, `--changes`), and
+    how they are timed side by side."""
+    parser = bsub.add_parser(name, help=help)
+    parser.add_argument("task", type=task_names, help="comma-separated tasks")
+    parser.add_argument(f"--{what}s", type=lambda s: [v for v in s.split(",") if v], default=None,
+                        help=f"comma-separated {what}s (default: all that apply; as-trained always measured): {names}")
     parser.add_argument("--batch", type=bounded(int, 1, 65536), default=batch, help="simulations stepped together")
     parser.add_argument("--threads", type=bounded(int, 1, 1024), default=2, help="threads of the C engine")
     parser.add_argument("--seconds", type=bounded(float, 0.1, 3600.0), default=5.0,
@@ -109,6 +114,7 @@ def _side_by_side_options(parser, batch: int, what: str) -> None:
     parser.add_argument("--seed", type=SEED, default=0)
     parser.add_argument("--json", action="store_true", help=f"print a JSON list, one object per task and {what}")
     parser.add_argument("--quiet", action="store_true", help="no progress messages")
+    parser.set_defaults(fn=fn)
 
 
 def cmd_bench_soccer(args) -> int:
@@ -172,25 +178,18 @@ def add_bench_commands(sub) -> None:
     bt.add_argument("--json", action="store_true", help="print a JSON list, one object per task")
     bt.add_argument("--quiet", action="store_true", help="no progress messages")
     bt.set_defaults(fn=cmd_bench_train)
-    bp = bsub.add_parser("physics", help="what each physics setting costs: a task's model as it trains and with one "
-                                         "setting changed at a time (solver, iterations, cone, condim, ...)")
-    bp.add_argument("task", type=task_names, help="comma-separated tasks, measured one after the other")
-    bp.add_argument("--variants", type=lambda s: [v for v in s.split(",") if v], default=None,
-                    help="comma-separated variants (default: all; as-trained always measured): as-trained, cg, pgs, "
-                         "iterations-1, other-cone, condim-3, no-frictionloss, no-eulerdamp, sparse-jacobian, "
-                         "other-ccd, ccd-loose, no-ceiling-pairs, no-trunk-pairs")
-    _side_by_side_options(bp, batch=1024, what="variant")
-    bp.set_defaults(fn=cmd_bench_physics)
-    bg = bsub.add_parser("settings", help="what each setting of a task's config costs its physics under its "
-                                          "randomisation (cone draws, feet condim, margin, softness, level worlds), "
-                                          "side by side, with the ratio to go1-flat where it runs too")
-    bg.add_argument("task", type=task_names, help="comma-separated tasks, interleaved in every round")
-    bg.add_argument("--changes", type=lambda s: [v for v in s.split(",") if v], default=None,
-                    help="comma-separated changes (default: all that apply; as-trained always measured): as-trained, "
-                         "no-cone-draws, feet-condim-3, no-margin, model-softness, no-randomisation, tunnels, "
-                         "heights-10cm")
-    _side_by_side_options(bg, batch=256, what="change")
-    bg.set_defaults(fn=cmd_bench_settings)
+    _side_by_side_parser(bsub, "physics", cmd_bench_physics, batch=1024, what="variant",
+                         help="what each physics setting costs: a task's model as it trains and with one setting "
+                              "changed at a time (solver, iterations, cone, condim, ...)",
+                         names=("as-trained, cg, pgs, iterations-1, other-cone, condim-3, no-frictionloss, "
+                                "no-eulerdamp, sparse-jacobian, other-ccd, ccd-loose, no-ceiling-pairs, "
+                                "no-trunk-pairs"))
+    _side_by_side_parser(bsub, "settings", cmd_bench_settings, batch=256, what="change",
+                         help="what each setting of a task's config costs its physics under its randomisation (cone "
+                              "draws, feet condim, margin, softness, level worlds), side by side, with the ratio to "
+                              "go1-flat where it runs too",
+                         names=("as-trained, no-cone-draws, feet-condim-3, no-margin, model-softness, "
+                                "no-randomisation, tunnels, heights-10cm"))
     sk = bsub.add_parser("soak", help="random and extreme actions under randomisation: non-finite values and "
                                       "divergences that reach the learner")
     sk.add_argument("--tasks", type=task_names, default=["confined-waypoints", "soccer-1v1"],

@@ -71,7 +71,7 @@ def eval_request(args):
                        world_seed=args.world_seed, opponent=args.opponent, teammate=args.teammate, ood=args.ood,
                        nominal=args.nominal, oracle=tuple(args.oracle), pilot=args.pilot, tracker=args.tracker,
                        compare_teacher=args.compare_teacher, compare_pilot=args.compare_pilot,
-                       env_set=tuple(getattr(args, "set", None) or ()), robot=args.robot,
+                       env_set=tuple(args.set), robot=args.robot,
                        compare_robots=tuple(args.compare_robots or ()), progress=not args.quiet)
 
 
