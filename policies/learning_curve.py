@@ -12,7 +12,9 @@ from policies.eval_report import EvalRequest, evaluation_report
 from policies.plots import line_plot
 from policies.run_dir import RunDir, checkpoint_step
 
-FIGURES = ("tracking_error_mps", "episodes_with_a_fall", "episode_return", "success_rate")
+FIGURES = ("tracking_error_mps", "episodes_with_a_fall", "falls_per_episode", "episode_return", "success_rate",
+           "collisions_per_episode", "final_distance_m", "goals_for_per_episode", "goals_against_per_episode",
+           "win_rate")
 """Figures of an evaluation report a curve keeps (those the task reports)."""
 
 
@@ -29,13 +31,15 @@ def saved_at(run: RunDir) -> dict[int, float]:
 
 def learning_curve(request: EvalRequest, every: int = 1) -> dict:
     """`request` (a `legged eval` request; its checkpoint is ignored) applied to every `every`-th checkpoint of its
-    run and to the last: {"run", "points": [{"step", "wall_s", figures...}]}; ValueError when the run is of a
-    confined task (figures per difficulty), has no checkpoint or its metrics do not say when one was saved."""
+    run and to the last: {"run", "points": [{"step", "wall_s", figures...}]} (a confined task's figures are those of
+    its one level, `request.difficulty`); ValueError when a confined run is not given exactly one level, or the run
+    has no checkpoint or its metrics do not say when one was saved."""
     run = RunDir(request.run_dir)
     task = run.load_config().task  # RunDirError naming the path if it is not a run
-    if task_entry(task).kind == "confined":
-        raise ValueError(f"{run.path}: {task} is evaluated per difficulty level; follow it with `legged eval RUN "
-                         "--difficulty L --checkpoint FILE` (legged curve plots one figure per checkpoint)")
+    confined = task_entry(task).kind == "confined"
+    if confined and (request.difficulty is None or len(request.difficulty) != 1):
+        raise ValueError(f"{run.path}: {task} is evaluated per difficulty level; give one, e.g. --difficulty 0 "
+                         "(legged curve plots one figure per checkpoint)")
     checkpoints = run.checkpoints()
     if not checkpoints:
         raise ValueError(f"{run.path} has no checkpoint to evaluate")
@@ -49,9 +53,12 @@ def learning_curve(request: EvalRequest, every: int = 1) -> dict:
         if step not in times:
             raise ValueError(f"{path}: {run.metrics_path} has no record of step {step} (when was it saved?)")
         report = evaluation_report(dataclasses.replace(request, checkpoint=str(path)))
+        if confined:
+            report = report["difficulties"][str(request.difficulty[0])]
         points.append({"step": step, "wall_s": times[step], **{k: report[k] for k in FIGURES if k in report}})
+    level = {"difficulty": request.difficulty[0]} if confined else {}
     return {"run": str(run.path), "episodes": request.episodes, "seed": request.seed, "physics": request.physics,
-            "points": points}
+            **level, "points": points}
 
 
 def plot_curves(curves: list[dict], figure: str, out: str | Path, goal: float | None = None) -> Path:

@@ -59,3 +59,22 @@ def test_each_task_is_set_beside_its_own_playground_peer():
     assert mjx["go1-rough"]["peer"] == "Go1JoystickRoughTerrain" and mjx["go1-rough"]["ratio_vs_peer"] == 1.5
     assert mjx["confined-waypoints"]["peer"] == "Go1JoystickRoughTerrain"  # the nearest Playground has
     assert not any("peer" in r for r in records if r["physics"] == "native")  # MJX beside MJX only
+
+
+def test_the_update_bench_times_every_variant_against_the_plain_update():
+    """`legged bench update`: each variant's median over its interleaved rounds, as a ratio to the plain update's
+    (speeds are measured, not asserted); an unknown variant, or none plain to compare with, is refused."""
+    import torch
+
+    from policies.bench_update import bench_update
+
+    torch.set_num_threads(1)
+    record = bench_update(20, (16,), batch=64, epochs=2, mini_batches=2, rounds=3,
+                          variants=("plain", "fused-adam", "foreach-adam", "one-thread"))
+    assert set(record["variants"]) == {"plain", "fused-adam", "foreach-adam", "one-thread"}
+    for figures in record["variants"].values():
+        assert len(figures["update_s_each"]) == 3 and figures["update_s"] == sorted(figures["update_s_each"])[1]
+        assert figures["speed_vs_plain"] == pytest.approx(record["variants"]["plain"]["update_s"] / figures["update_s"])
+    assert record["variants"]["plain"]["speed_vs_plain"] == 1.0
+    with pytest.raises(ValueError, match="pick from plain"):
+        bench_update(20, (16,), variants=("fused-adam", "turbo"))

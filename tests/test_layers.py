@@ -189,7 +189,8 @@ POLICIES_ORDER = [
                        "policies.card_tables", "policies.cards", "policies.card_summary", "policies.figure_lint",
                        "policies.soccer.drill", "policies.navigate", "policies.nav_bench", "policies.export",
                        "policies.convert", "policies.average", "policies.tables", "policies.plots",
-                       "policies.bench_encoder", "policies.bench_train", "policies.learning_curve")),
+                       "policies.bench_encoder", "policies.bench_train", "policies.bench_update",
+                       "policies.learning_curve")),
 ]
 """The groups of `policies`, lowest first, as LEGGED_ORDER: run files (config I/O, configs, the soccer section of
 the config, the tasks' recipes, run directories, the process launch) < checkpoints (the data-only formats, their weights-only form) <
@@ -248,8 +249,8 @@ def test_the_groups_place_modules_by_their_most_specific_entry():
         [0, 2, 4, 6]
 
 
-LAZY_IMPORTS = 98
-"""Import statements inside functions that import a project module, today: the command line's (legged.cli, 66:
+LAZY_IMPORTS = 99
+"""Import statements inside functions that import a project module, today: the command line's (legged.cli, 67:
 each command imports what it runs) and the dashboard's checks' (web.source), which answer before torch and the
 task registry load; the registry's soccer environments (legged.tasks), loaded when a soccer task is built; Brax's
 trainer (policies.training), loaded by Brax runs only; the placo solver and JAX in the gait table's open-loop

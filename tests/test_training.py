@@ -420,8 +420,10 @@ def test_a_learning_curve_plots_held_out_figures_against_time_from_process_start
     assert "has no checkpoint to evaluate" in capsys.readouterr().err
     confined = RunDir(tmp_path / "confined")
     confined.create(TrainConfig(task="confined-waypoints").resolved())
-    assert main(["curve", str(confined.path)]) == 2
-    assert "evaluated per difficulty level" in capsys.readouterr().err
+    assert main(["curve", str(confined.path)]) == 2  # a confined run's figures are per level: one must be named
+    assert "evaluated per difficulty level; give one, e.g. --difficulty 0" in capsys.readouterr().err
+    assert main(["curve", str(confined.path), "--difficulty", "0"]) == 2
+    assert "has no checkpoint to evaluate" in capsys.readouterr().err
 
 
 def test_table_puts_saved_evaluations_side_by_side(tmp_path, capsys):

@@ -1,5 +1,5 @@
-"""The command line's benchmarks: `legged bench env|train|physics|settings|soak|soccer|encoder` (and `bench plan` and
-`bench navigate`, from legged.cli.nav)."""
+"""The command line's benchmarks: `legged bench env|train|physics|settings|soak|soccer|encoder|update` (and `bench
+plan` and `bench navigate`, from legged.cli.nav)."""
 
 from __future__ import annotations
 
@@ -58,6 +58,22 @@ def cmd_bench_encoder(args) -> int:
         lambda r: f"H={r['history_steps']:4d}  encoder {r['encoder_s']:.3f} s  conv1d {r['conv1d_s']:.3f} s "
                   f"({r['conv1d_over_unfold']:.2f}x)  head {r['head_s']:.3f} s  "
                   f"encoder/head {r['encoder_over_head']:.1f}x"))
+
+
+def cmd_bench_update(args) -> int:
+    """`legged bench update`: a PPO update's seconds under each option torch offers, side by side."""
+    import torch
+
+    from policies.bench_update import bench_update
+
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    records = [bench_update(inputs, tuple(hidden), batch=args.batch, epochs=args.epochs, mini_batches=args.mini_batches,
+                            rounds=args.rounds, variants=tuple(args.variants))
+               for inputs in args.inputs for hidden in (args.hidden or [[512, 256, 128]])]
+    return _print_records(records, args.json, _each_line(
+        lambda r: f"inputs {r['inputs']:5d} hidden {r['hidden']}: " + "  ".join(
+            f"{v} {x['update_s']:.2f} s ({x['speed_vs_plain']:.2f}x)" for v, x in r["variants"].items())))
 
 
 def cmd_bench_train(args) -> int:
@@ -228,3 +244,18 @@ def add_bench_commands(sub) -> None:
     bn.add_argument("--threads", type=THREADS, default=0, metavar="N", help="torch threads (default: torch's)")
     bn.add_argument("--json", action="store_true", help="print a JSON list, one object per history length")
     bn.set_defaults(fn=cmd_bench_encoder)
+    bu = bsub.add_parser("update", help="one PPO update's seconds with each option torch offers a CPU (fused or "
+                                        "multi-tensor Adam, torch.compile, one thread), side by side")
+    bu.add_argument("--inputs", type=ints(1, 100000), default=[902], help="comma-separated observation sizes")
+    bu.add_argument("--hidden", type=ints(1, 100000), action="append", default=None,
+                    help="comma-separated hidden sizes of actor and critic (repeatable; default 512,256,128)")
+    bu.add_argument("--batch", type=bounded(int, 1, 10**7), default=24576, help="steps of one iteration's rollout")
+    bu.add_argument("--epochs", type=bounded(int, 1, 100), default=5)
+    bu.add_argument("--mini-batches", type=bounded(int, 1, 1024), default=4)
+    bu.add_argument("--rounds", type=bounded(int, 1, 100), default=5, help="timed updates per variant, interleaved")
+    bu.add_argument("--variants", type=lambda s: [v for v in s.split(",") if v],
+                    default=["plain", "foreach-adam", "fused-adam", "compiled", "one-thread"],
+                    help="comma-separated: plain, foreach-adam, fused-adam, compiled, one-thread")
+    bu.add_argument("--threads", type=THREADS, default=0, metavar="N", help="torch threads (default: torch's)")
+    bu.add_argument("--json", action="store_true", help="print a JSON list, one object per size")
+    bu.set_defaults(fn=cmd_bench_update)

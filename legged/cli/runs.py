@@ -51,7 +51,8 @@ def cmd_curve(args) -> int:
     for run_dir in args.run_dir:
         request = EvalRequest(run_dir=run_dir, episodes=args.episodes, seed=args.seed, physics=args.physics,
                               threads=args.threads or None, num_envs=args.num_envs, nominal=args.nominal,
-                              progress=not args.quiet)
+                              difficulty=None if args.difficulty is None else (args.difficulty,),
+                              opponent=args.opponent, progress=not args.quiet)
         curves.append(learning_curve(request, args.every))
     out = args.out or f"{args.run_dir[0].rstrip('/')}/curve_{args.figure}.png"
     path = plot_curves(curves, args.figure, out, args.goal)
@@ -156,9 +157,13 @@ def add_run_commands(sub) -> None:
     add_physics_options(cu, default="native")
     cu.add_argument("--num-envs", type=bounded(int, 1, 4096), default=None, help="episodes run side by side")
     cu.add_argument("--nominal", action="store_true", help="domain randomisation and observation noise off")
+    cu.add_argument("--difficulty", type=bounded(int, 0, 99), default=None,
+                    help="confined tasks: the one level whose held-out worlds every checkpoint plays")
+    cu.add_argument("--opponent", default=None, metavar="placo|scripted|RUN",
+                    help="soccer tasks: who plays the other team (default: the standing script, as `legged eval`)")
     cu.add_argument("--figure", default="tracking_error_mps",
                     help="the evaluation figure plotted (tracking_error_mps, episodes_with_a_fall, episode_return, "
-                         "...)")
+                         "success_rate, goals_for_per_episode, ...)")
     cu.add_argument("--goal", type=float, default=None, help="draw a dashed goal line at this value")
     cu.add_argument("--out", default=None, help="PNG file (default: the first RUN_DIR/curve_<figure>.png)")
     cu.add_argument("--json", action="store_true", help="one-line JSON: the plot and every point")
